@@ -1,0 +1,226 @@
+//! The live-editable parameters of a run.
+
+use cloth_mesh::{SpringKind, Vec3};
+
+/// Every parameter that may change between two steps, in one `Copy` struct (rapier's
+/// `IntegrationParameters`). Defaults are the course's.
+///
+/// Units are SI. The course's GUI shows density in g/cm^2 (the file's kg/m^2 divided by 10) and
+/// damping in percent; this struct keeps the file's units and leaves display to the UI.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepParams {
+    /// Spring constant of structural and shearing springs, N/m (default 5000). Bending springs
+    /// use `0.2 * ks`. Read by every solver.
+    pub ks: f64,
+    /// Surface density, kg/m^2 (default 150, shown as 15 g/cm^2). Point mass is re-derived from
+    /// it every step, so an edit acts at once. Read by every solver.
+    pub density: f64,
+    /// Damping, percent (default 0.2): Verlet scales the implied velocity by
+    /// `1 - damping / 100` each step. Implicit solvers turn it into the equivalent drag.
+    pub damping: f64,
+    /// Gravity, m/s^2 (default (0, -9.8, 0)).
+    pub gravity: Vec3,
+    /// Whether structural springs exert forces (default true).
+    pub structural: bool,
+    /// Whether shearing springs exert forces (default true).
+    pub shearing: bool,
+    /// Whether bending springs exert forces (default true).
+    pub bending: bool,
+    /// Simulation steps per frame (default 30). With `frames_per_sec` it sets the step
+    /// `dt = 1 / (frames_per_sec * steps_per_frame)`; self-collision divides its correction by it.
+    pub steps_per_frame: u32,
+    /// Frames per second of simulated time (default 90).
+    pub frames_per_sec: f64,
+    /// Whether points repel each other closer than twice the thickness (default true).
+    pub self_collision: bool,
+    /// Whether the 10 % maximum-stretch constraint applies (default true, the course's model).
+    pub stretch_limit: bool,
+    /// Inner iterations per step for iterative solvers such as fast-implicit (default 10);
+    /// ignored by Verlet.
+    pub iterations: u32,
+}
+
+impl Default for StepParams {
+    fn default() -> Self {
+        Self {
+            ks: 5000.0,
+            density: 150.0,
+            damping: 0.2,
+            gravity: Vec3::new(0.0, -9.8, 0.0),
+            structural: true,
+            shearing: true,
+            bending: true,
+            steps_per_frame: 30,
+            frames_per_sec: 90.0,
+            self_collision: true,
+            stretch_limit: true,
+            iterations: 10,
+        }
+    }
+}
+
+/// A parameter outside its allowed range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{name} is {value}, but it must be {allowed}")]
+pub struct ParamError {
+    /// The parameter's name as in scene files (`ks`, `damping`...).
+    pub name: &'static str,
+    /// The bad value, as text.
+    pub value: String,
+    /// What is allowed.
+    pub allowed: &'static str,
+}
+
+/// The ratio of the maximum stretch constraint: springs end a step at most 10 % over rest.
+pub const MAX_STRETCH: f64 = 1.1;
+
+impl StepParams {
+    /// The time step, seconds: `1 / (frames_per_sec * steps_per_frame)` (1/2700 by default).
+    #[must_use]
+    pub fn dt(&self) -> f64 {
+        1.0 / (self.frames_per_sec * f64::from(self.steps_per_frame))
+    }
+
+    /// Whether springs of `kind` exert forces.
+    #[must_use]
+    pub fn enabled(&self, kind: SpringKind) -> bool {
+        match kind {
+            SpringKind::Structural => self.structural,
+            SpringKind::Shearing => self.shearing,
+            SpringKind::Bending => self.bending,
+        }
+    }
+
+    /// Stiffness of springs of `kind`, N/m, or 0 when the kind is disabled.
+    #[must_use]
+    pub fn stiffness(&self, kind: SpringKind) -> f64 {
+        if self.enabled(kind) {
+            self.ks * kind.stiffness_factor()
+        } else {
+            0.0
+        }
+    }
+
+    /// Velocity drag rate, 1/s, equivalent to the course's per-step damping factor at the
+    /// current step: `c = -ln(1 - damping/100) / dt` (about 5.4 1/s at the defaults).
+    #[must_use]
+    pub fn drag_rate(&self) -> f64 {
+        -(1.0 - self.damping / 100.0).ln() / self.dt()
+    }
+
+    /// The explicit-Verlet stability limit on `ks` for this density and step, N/m: about
+    /// `m / (2 dt^2)` for a point mass `m` (the grid's largest stiffness eigenvalue is about 8 ks).
+    #[must_use]
+    pub fn explicit_ks_limit(&self, point_mass: f64) -> f64 {
+        point_mass / (2.0 * self.dt() * self.dt())
+    }
+
+    /// Checks every field against its allowed range.
+    ///
+    /// # Errors
+    /// The first [`ParamError`] found.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let bad = |name, value: String, allowed| {
+            Err(ParamError {
+                name,
+                value,
+                allowed,
+            })
+        };
+        if !(self.ks.is_finite() && self.ks >= 0.0) {
+            return bad("ks", self.ks.to_string(), "a finite number >= 0 (N/m)");
+        }
+        if !(self.density.is_finite() && self.density > 0.0) {
+            return bad(
+                "density",
+                self.density.to_string(),
+                "a finite number > 0 (kg/m^2)",
+            );
+        }
+        if !(self.damping.is_finite() && (0.0..=100.0).contains(&self.damping)) {
+            return bad(
+                "damping",
+                self.damping.to_string(),
+                "between 0 and 100 (percent)",
+            );
+        }
+        if !self.gravity.iter().all(|g| g.is_finite()) {
+            return bad(
+                "gravity",
+                format!("{:?}", self.gravity.as_slice()),
+                "three finite numbers (m/s^2)",
+            );
+        }
+        if self.steps_per_frame == 0 || self.steps_per_frame > 10_000 {
+            return bad(
+                "simulation_steps",
+                self.steps_per_frame.to_string(),
+                "an integer from 1 to 10000",
+            );
+        }
+        if !(self.frames_per_sec.is_finite()
+            && self.frames_per_sec > 0.0
+            && self.frames_per_sec <= 10_000.0)
+        {
+            return bad(
+                "frames_per_sec",
+                self.frames_per_sec.to_string(),
+                "a number > 0 and <= 10000",
+            );
+        }
+        if self.iterations == 0 || self.iterations > 1000 {
+            return bad(
+                "iterations",
+                self.iterations.to_string(),
+                "an integer from 1 to 1000",
+            );
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_step_is_one_2700th_of_a_second_and_drag_about_5_4() {
+        let p = StepParams::default();
+        assert!((p.dt() - 1.0 / 2700.0).abs() < 1e-18);
+        // -ln(0.998) * 2700 = 5.4054...
+        assert!((p.drag_rate() - 5.4054).abs() < 1e-3);
+        // 0.06 kg / (2 * (1/2700)^2) = 218,700 N/m.
+        assert!((p.explicit_ks_limit(0.06) - 218_700.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn out_of_range_values_are_named() {
+        let e = StepParams {
+            damping: 150.0,
+            ..StepParams::default()
+        }
+        .validate()
+        .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "damping is 150, but it must be between 0 and 100 (percent)"
+        );
+        assert!(
+            StepParams {
+                ks: f64::NAN,
+                ..StepParams::default()
+            }
+            .validate()
+            .is_err()
+        );
+        assert!(
+            StepParams {
+                density: 0.0,
+                ..StepParams::default()
+            }
+            .validate()
+            .is_err()
+        );
+        assert!(StepParams::default().validate().is_ok());
+    }
+}
