@@ -23,7 +23,7 @@ pub use collider::{Collider, Plane, Sphere, apply_colliders};
 pub use diagnostics::{kinetic_energy, max_stretch_ratio};
 pub use error::SolveError;
 pub use kind::{SolverKind, UnknownSolver};
-pub use params::{MAX_STRETCH, ParamError, StepParams};
+pub use params::{MAX_STRETCH, ParamError, REFERENCE_STEPS_PER_FRAME, StepParams};
 pub use self_collision::SpatialHash;
 pub use stretch::limit_stretch;
 pub use verlet::Verlet;

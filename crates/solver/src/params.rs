@@ -71,6 +71,9 @@ pub struct ParamError {
     pub allowed: &'static str,
 }
 
+/// The course's steps per frame, the reference at which its damping factor is defined.
+pub const REFERENCE_STEPS_PER_FRAME: u32 = 30;
+
 /// The ratio of the maximum stretch constraint: springs end a step at most 10 % over rest.
 pub const MAX_STRETCH: f64 = 1.1;
 
@@ -101,11 +104,16 @@ impl StepParams {
         }
     }
 
-    /// Velocity drag rate, 1/s, equivalent to the course's per-step damping factor at the
-    /// current step: `c = -ln(1 - damping/100) / dt` (about 5.4 1/s at the defaults).
+    /// Velocity drag rate, 1/s, equivalent to the course's damping: its per-step factor
+    /// `1 - damping/100` at the course's step (`steps_per_frame` = 30 at `frames_per_sec`) is a
+    /// drag `c = -ln(1 - damping/100) / dt_ref` (about 5.4 1/s at the defaults).
+    ///
+    /// Solvers that take other step sizes (the implicit ones) use this rate so that the damping
+    /// a user sets means the same thing whatever the step.
     #[must_use]
     pub fn drag_rate(&self) -> f64 {
-        -(1.0 - self.damping / 100.0).ln() / self.dt()
+        let dt_ref = 1.0 / (self.frames_per_sec * f64::from(REFERENCE_STEPS_PER_FRAME));
+        -(1.0 - self.damping / 100.0).ln() / dt_ref
     }
 
     /// The explicit-Verlet stability limit on `ks` for this density and step, N/m: about
