@@ -2,7 +2,7 @@
 
 use clap::{Parser, Subcommand};
 
-use crate::{scenes, simulate};
+use crate::{app, scenes, simulate};
 
 /// A CS184 mass-spring cloth simulator in the terminal.
 #[derive(Debug, Parser)]
@@ -15,6 +15,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// The live terminal UI (the default): watch the cloth and edit it while it moves.
+    Tui(app::Args),
     /// Run a scene headless and write the final state (JSON, or OBJ for a `.obj` file).
     Simulate(simulate::Args),
     /// List the bundled scenes.
@@ -25,14 +27,13 @@ impl Cli {
     /// Runs the chosen command.
     pub fn run(self) -> anyhow::Result<()> {
         match self.command {
+            Some(Command::Tui(args)) => app::run(&args),
             Some(Command::Simulate(args)) => simulate::run(&args),
             Some(Command::Scenes) => {
                 scenes::run();
                 Ok(())
             }
-            None => {
-                anyhow::bail!("the terminal UI is not built yet; try `clothsim simulate pinned4`")
-            }
+            None => app::run(&app::Args::default()),
         }
     }
 }

@@ -1,0 +1,1 @@
+//! Tests of the app: update driven by messages, and whole-screen snapshots.
