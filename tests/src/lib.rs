@@ -11,7 +11,12 @@ pub fn scene(name: &str) -> Scene {
 }
 
 /// Runs `steps` Verlet steps of `scene` with `params`, calling `check` after each one.
-pub fn run_steps(scene: &Scene, params: &StepParams, steps: usize, mut check: impl FnMut(usize, &ClothState)) -> ClothState {
+pub fn run_steps(
+    scene: &Scene,
+    params: &StepParams,
+    steps: usize,
+    mut check: impl FnMut(usize, &ClothState),
+) -> ClothState {
     let mut solver = Verlet::new();
     let mut state = ClothState::new(&scene.mesh);
     for i in 0..steps {

@@ -14,7 +14,10 @@ fn pinned_points_never_move() {
         let start = s.mesh.start_positions().to_vec();
         run_steps(&s, &s.params, 90 * FRAME, |i, st| {
             for (j, _) in s.mesh.pinned().iter().enumerate().filter(|(_, p)| **p) {
-                assert_eq!(st.positions[j], start[j], "{name}: pinned point {j} moved at step {i}");
+                assert_eq!(
+                    st.positions[j], start[j],
+                    "{name}: pinned point {j} moved at step {i}"
+                );
             }
         });
     }
@@ -42,7 +45,11 @@ fn free_fall_matches_the_exact_discrete_solution() {
     let st = run_steps(&s, &p, steps, |_, _| {});
     let expected = verlet_free_fall(steps as u32, 1.0 - p.damping / 100.0, -9.8, p.dt());
     for (q, q0) in st.positions.iter().zip(s.mesh.start_positions()) {
-        assert!((q.y - q0.y - expected).abs() < 1e-9, "{} vs {expected}", q.y - q0.y);
+        assert!(
+            (q.y - q0.y - expected).abs() < 1e-9,
+            "{} vs {expected}",
+            q.y - q0.y
+        );
         assert!((q.x - q0.x).abs() < 1e-12 && (q.z - q0.z).abs() < 1e-12);
     }
 }
@@ -58,7 +65,10 @@ fn free_fall_approaches_the_drag_terminal_velocity() {
     let st = run_steps(&s, &p, 180 * FRAME, |_, _| {});
     let v = (st.positions[0].y - st.last[0].y) / p.dt();
     let terminal = -9.8 * p.dt() / (p.damping / 100.0);
-    assert!((v / terminal - 1.0).abs() < 1e-4, "v = {v}, terminal {terminal}");
+    assert!(
+        (v / terminal - 1.0).abs() < 1e-4,
+        "v = {v}, terminal {terminal}"
+    );
 }
 
 #[test]
@@ -93,7 +103,10 @@ fn a_hanging_spring_settles_at_m_g_over_k() {
     let expected = m * 9.8 / params.ks;
     for (free, pin) in [(0, 2), (1, 3)] {
         let stretch = (state.positions[free] - state.positions[pin]).norm() - 1.0;
-        assert!((stretch - expected).abs() < 1e-9, "stretch {stretch}, expected {expected}");
+        assert!(
+            (stretch - expected).abs() < 1e-9,
+            "stretch {stretch}, expected {expected}"
+        );
     }
 }
 
@@ -105,13 +118,21 @@ fn nothing_passes_through_the_plane() {
     // rounding remains: 1e-12 m.
     for name in ["plane", "selfCollision", "drape"] {
         let s = scene(name);
-        let Some(Collider::Plane(plane)) = s.colliders.iter().find(|c| matches!(c, Collider::Plane(_))).copied() else {
+        let Some(Collider::Plane(plane)) = s
+            .colliders
+            .iter()
+            .find(|c| matches!(c, Collider::Plane(_)))
+            .copied()
+        else {
             panic!("{name} has a plane");
         };
         run_steps(&s, &s.params, 180 * FRAME, |i, st| {
             for (j, q) in st.positions.iter().enumerate() {
                 let d = (q - plane.point).dot(&plane.normal);
-                assert!(d > -1e-12, "{name}: point {j} is {d} m below the plane at step {i}");
+                assert!(
+                    d > -1e-12,
+                    "{name}: point {j} is {d} m below the plane at step {i}"
+                );
             }
         });
     }
@@ -127,13 +148,23 @@ fn nothing_ends_inside_the_sphere() {
     // the depth by 1.27 mm and 0.84 mm.
     for name in ["sphere", "drape"] {
         let s = scene(name);
-        let Some(Collider::Sphere(sphere)) = s.colliders.first().copied() else { panic!("{name} has a sphere") };
-        let longest = 1.1 * s.mesh.springs().iter().map(|sp| sp.rest).fold(0.0, f64::max);
+        let Some(Collider::Sphere(sphere)) = s.colliders.first().copied() else {
+            panic!("{name} has a sphere")
+        };
+        let longest = 1.1
+            * s.mesh
+                .springs()
+                .iter()
+                .map(|sp| sp.rest)
+                .fold(0.0, f64::max);
         let bound = sphere.radius - (sphere.radius.powi(2) - longest * longest / 4.0).sqrt();
         run_steps(&s, &s.params, 180 * FRAME, |i, st| {
             for (j, q) in st.positions.iter().enumerate() {
                 let depth = sphere.radius - (q - sphere.origin).norm();
-                assert!(depth < bound, "{name}: point {j} is {depth} m inside at step {i} (bound {bound})");
+                assert!(
+                    depth < bound,
+                    "{name}: point {j} is {depth} m inside at step {i} (bound {bound})"
+                );
             }
         });
     }
@@ -165,7 +196,11 @@ fn pinned4_settles_symmetric_under_the_squares_mirrors() {
     // The springs and gravity are symmetric, so with the order-dependent steps off (stretch
     // sweep, self-collision) the rest state is symmetric to rounding: 1e-9 m.
     let s = scene("pinned4");
-    let exact = StepParams { stretch_limit: false, self_collision: false, ..s.params };
+    let exact = StepParams {
+        stretch_limit: false,
+        self_collision: false,
+        ..s.params
+    };
     let st = run_steps(&s, &exact, 5 * 90 * FRAME, |_, _| {});
     assert!(mirror_asymmetry(&st) < 1e-9, "{}", mirror_asymmetry(&st));
     // The faithful model sweeps springs and self-collisions in index order, which biases the
@@ -174,7 +209,11 @@ fn pinned4_settles_symmetric_under_the_squares_mirrors() {
     // of this 1 m cloth has 5 mm cells).
     let st = run_steps(&s, &s.params, 5 * 90 * FRAME, |_, _| {});
     let cell = 1.0 / 49.0;
-    assert!(mirror_asymmetry(&st) < cell / 10.0, "{}", mirror_asymmetry(&st));
+    assert!(
+        mirror_asymmetry(&st) < cell / 10.0,
+        "{}",
+        mirror_asymmetry(&st)
+    );
 }
 
 #[test]
@@ -183,7 +222,12 @@ fn the_same_run_twice_is_bit_identical() {
         let s = scene(name);
         let a = run_steps(&s, &s.params, 30 * FRAME, |_, _| {});
         let b = run_steps(&s, &s.params, 30 * FRAME, |_, _| {});
-        let bits = |st: &ClothState| st.positions.iter().flat_map(|p| p.iter().map(|c| c.to_bits())).collect::<Vec<_>>();
+        let bits = |st: &ClothState| {
+            st.positions
+                .iter()
+                .flat_map(|p| p.iter().map(|c| c.to_bits()))
+                .collect::<Vec<_>>()
+        };
         assert_eq!(bits(&a), bits(&b), "{name}");
     }
 }
@@ -201,13 +245,18 @@ fn reset_restores_the_start_exactly() {
 fn a_diverging_run_is_an_error_naming_the_point() {
     // ks = 1e9 is ~4500 x the explicit stability limit (2.2e5 N/m): Verlet blows up in steps.
     let s = scene("pinned4");
-    let p = StepParams { ks: 1e9, ..s.params };
+    let p = StepParams {
+        ks: 1e9,
+        ..s.params
+    };
     let mut state = ClothState::new(&s.mesh);
     let mut solver = Verlet::new();
     let err = (0..1000)
         .find_map(|_| solver.step(&s.mesh, &s.colliders, &p, &mut state).err())
         .expect("diverges");
-    let cloth_solver::SolveError::NonFinite { point, x, y } = err else { panic!("{err:?}") };
+    let cloth_solver::SolveError::NonFinite { point, x, y } = err else {
+        panic!("{err:?}")
+    };
     assert_eq!((x, y), (point % 50, point / 50));
     assert!(err.to_string().contains("lower ks"));
 }
@@ -220,7 +269,10 @@ fn live_edits_act_on_the_next_step() {
     s.colliders.clear();
     let mut st = run_steps(&s, &s.params, 10, |_, _| {});
     let before = st.positions[0].y - st.last[0].y;
-    let p = StepParams { gravity: Vec3::zeros(), ..s.params };
+    let p = StepParams {
+        gravity: Vec3::zeros(),
+        ..s.params
+    };
     Verlet::new().step(&s.mesh, &[], &p, &mut st).unwrap();
     let after = st.positions[0].y - st.last[0].y;
     assert!((after - before * (1.0 - p.damping / 100.0)).abs() < 1e-15);
