@@ -41,7 +41,7 @@ impl Bounds {
     /// # Errors
     /// [`RenderError::NonFinite`] when a point is not finite; `BadOption` for an empty cloth.
     pub fn of_solids(positions: &[Vec3], colliders: &[Collider]) -> Result<Self, RenderError> {
-        let mut b = Self::of_points(positions)?.ok_or(RenderError::BadOption {
+        let mut b = Self::of_points(positions)?.ok_or_else(|| RenderError::BadOption {
             name: "positions",
             value: "0 points".to_owned(),
             allowed: "at least one point",

@@ -312,10 +312,16 @@ fn pixel_box(target: &Target<'_>, camera: &Camera, corners: &[Vec3]) -> (usize, 
     )
 }
 
+/// The sphere is drawn at this fraction of its collision radius, as the course does: cloth
+/// points rest on the true surface, but the flat triangles between them cut chords into it, so a
+/// full-size sphere would poke through a cloth draped over it.
+const SPHERE_DRAW_SCALE: f64 = 0.92;
+
 /// Ray-casts a sphere at every pixel centre of its projected box, shading the hit with the
 /// sphere's exact normal. Depth-tested against the cloth like any other surface.
 fn draw_sphere(target: &mut Target<'_>, camera: &Camera, s: &Sphere, lighting: &Lighting) {
-    let r = Vec3::repeat(s.radius);
+    let radius = s.radius * SPHERE_DRAW_SCALE;
+    let r = Vec3::repeat(radius);
     let cube = Bounds {
         min: s.origin - r,
         max: s.origin + r,
@@ -326,7 +332,7 @@ fn draw_sphere(target: &mut Target<'_>, camera: &Camera, s: &Sphere, lighting: &
             let (o, d) = camera.ray(x as f64 + 0.5, y as f64 + 0.5);
             let oc = o - s.origin;
             let b = oc.dot(&d);
-            let disc = b * b - (oc.dot(&oc) - s.radius * s.radius);
+            let disc = b * b - (oc.dot(&oc) - radius * radius);
             if disc < 0.0 {
                 continue;
             }
@@ -336,7 +342,7 @@ fn draw_sphere(target: &mut Target<'_>, camera: &Camera, s: &Sphere, lighting: &
                 let hit = o + d * t;
                 let depth = camera.depth_of(hit);
                 if depth.is_finite() {
-                    let n = (hit - s.origin) / s.radius;
+                    let n = (hit - s.origin) / radius;
                     let shade = lighting.intensity(
                         n,
                         lighting.towards_light(hit),
@@ -544,4 +550,199 @@ fn draw_legend(frame: &mut AsciiFrame, view: &ViewSpec) {
     frame.put_str(0, h - 2, "|", None);
     frame.put_str(0, h - 1, "+--", None);
     frame.put_str(3, h - 1, right, None);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{FrameSize, View};
+    use cloth_mesh::GridSpec;
+
+    fn flat_cloth() -> (ClothMesh, ClothState) {
+        let mesh = ClothMesh::new(&GridSpec {
+            num_width_points: 11,
+            num_height_points: 11,
+            pinned: vec![(0, 0), (10, 0)],
+            ..GridSpec::default()
+        })
+        .unwrap();
+        let state = ClothState::new(&mesh);
+        (mesh, state)
+    }
+
+    fn draw(
+        mesh: &ClothMesh,
+        state: &ClothState,
+        colliders: &[Collider],
+        view: View,
+        options: &RenderOptions,
+    ) -> AsciiFrame {
+        let mut frame = AsciiFrame::new(FrameSize::new(40, 20).unwrap());
+        Renderer::new()
+            .render(mesh, state, colliders, &ViewSpec::new(view, mesh), options, &mut frame)
+            .unwrap();
+        frame
+    }
+
+    fn glyphs(frame: &AsciiFrame) -> String {
+        frame.to_plain()
+    }
+
+    #[test]
+    fn a_flat_cloth_seen_from_above_fills_its_square_with_front_glyphs() {
+        let (mesh, state) = flat_cloth();
+        let frame = draw(&mesh, &state, &[], View::Top, &RenderOptions::default());
+        // A 1 m square in a 40 x 20 frame of 2:1 cells with a 4 % margin: 1 m spans
+        // 40 * 0.92 = 36.8 columns and 18.4 rows, so every cell of columns 3..37, rows 1..19 is
+        // cloth and, seen from its normal's side, front face. No holes anywhere inside.
+        for y in 1..19 {
+            for x in 3..37 {
+                let g = frame.get(x, y).unwrap().glyph;
+                assert!(FRONT_RAMP.contains(&g) || g == PIN_GLYPH, "({x}, {y}) = {g:?}\n{}", glyphs(&frame));
+            }
+        }
+        // The margin stays empty.
+        assert!(frame.row(0).iter().all(|c| c.glyph == ' ' || c.glyph == PIN_GLYPH));
+        assert_eq!(frame.get(0, 10).unwrap().glyph, ' ');
+    }
+
+    #[test]
+    fn from_below_the_same_cloth_shows_its_back_face() {
+        let (mesh, state) = flat_cloth();
+        let frame = draw(&mesh, &state, &[], View::Bottom, &RenderOptions::default());
+        let g = frame.get(20, 10).unwrap().glyph;
+        assert!(BACK_RAMP.contains(&g), "{g:?}");
+        let one_sided = RenderOptions {
+            two_sided: false,
+            show_pins: false,
+            ..RenderOptions::default()
+        };
+        let frame = draw(&mesh, &state, &[], View::Bottom, &one_sided);
+        assert!(frame.cells().iter().all(|c| c.glyph == ' '), "back faces culled");
+    }
+
+    #[test]
+    fn a_cloth_seen_exactly_edge_on_is_still_a_line() {
+        // The flat cloth at y = 1 seen from the side has zero projected area; thin triangles
+        // are drawn as lines, so it shows as one full row of 0.92 * 40 columns.
+        let (mesh, state) = flat_cloth();
+        let frame = draw(&mesh, &state, &[], View::Side, &RenderOptions::default());
+        let drawn = frame.cells().iter().filter(|c| c.glyph != ' ').count();
+        assert!((36..=40).contains(&drawn), "{drawn}\n{}", glyphs(&frame));
+    }
+
+    #[test]
+    fn a_sphere_in_front_hides_the_cloth_and_one_behind_is_hidden() {
+        let (mesh, state) = flat_cloth();
+        let options = RenderOptions::default();
+        // Seen from above, a sphere above the cloth's centre hides it; one below is hidden.
+        for (y, expect_sphere) in [(1.5, true), (0.5, false)] {
+            let ball = Collider::Sphere(Sphere {
+                origin: Vec3::new(0.5, y, 0.5),
+                radius: 0.2,
+                friction: 0.0,
+            });
+            let frame = draw(&mesh, &state, &[ball], View::Top, &options);
+            let g = frame.get(20, 10).unwrap().glyph;
+            assert_eq!(SPHERE_RAMP.contains(&g), expect_sphere, "{g:?}\n{}", glyphs(&frame));
+            assert_eq!(FRONT_RAMP.contains(&g), !expect_sphere);
+        }
+    }
+
+    #[test]
+    fn shading_follows_the_normals_towards_the_light() {
+        // With only a key light straight down the top view, a cloth facing up is lit fully and a
+        // cloth tilted by 60 degrees gets cos 60 = 1/2: the glyph levels differ accordingly.
+        let (mesh, state) = flat_cloth();
+        let options = RenderOptions {
+            light: Light::Direction(Vec3::y()),
+            ambient: 0.0,
+            fill: 0.0,
+            diffuse: 1.0,
+            auto_contrast: false,
+            show_pins: false,
+            ..RenderOptions::default()
+        };
+        let level = |frame: &AsciiFrame| {
+            let g = frame.get(20, 10).unwrap().glyph;
+            FRONT_RAMP.iter().position(|r| *r == g).unwrap()
+        };
+        let flat = draw(&mesh, &state, &[], View::Top, &options);
+        assert_eq!(level(&flat), FRONT_RAMP.len() - 1);
+        // Rotate the cloth 60 degrees about x: y' = z sin, z' = z cos.
+        let (s, c) = (60f64.to_radians().sin(), 60f64.to_radians().cos());
+        let mut tilted = state.clone();
+        for p in &mut tilted.positions {
+            *p = Vec3::new(p.x, 1.0 + p.z * s, p.z * c);
+        }
+        let frame = draw(&mesh, &tilted, &[], View::Top, &options);
+        // 0.5 * 8 = level 4 exactly; the dither may round either way by at most one.
+        assert!((3..=5).contains(&level(&frame)), "{}", level(&frame));
+    }
+
+    #[test]
+    fn pins_are_marked_where_they_are() {
+        let (mesh, state) = flat_cloth();
+        let frame = draw(&mesh, &state, &[], View::Top, &RenderOptions::default());
+        let pins: Vec<(usize, usize)> = (0..20)
+            .flat_map(|y| (0..40).map(move |x| (x, y)))
+            .filter(|&(x, y)| frame.get(x, y).unwrap().glyph == PIN_GLYPH)
+            .collect();
+        // Pins at (0, 0) and (10, 0): x = 0 and 1 m, z = 0, which the top view puts at the top
+        // (z grows downwards) edge, 20 * 0.04 = 0.8 rows down, so in row 0; 36.8 columns apart.
+        assert_eq!(pins.len(), 2, "{pins:?}");
+        assert!(pins.iter().all(|&(_, y)| y == 0));
+        assert!((36..=38).contains(&(pins[1].0 - pins[0].0)));
+    }
+
+    #[test]
+    fn bad_input_is_an_error_not_a_panic() {
+        let (mesh, mut state) = flat_cloth();
+        let mut frame = AsciiFrame::with_size(40, 20).unwrap();
+        let mut r = Renderer::new();
+        let view = ViewSpec::new(View::Side, &mesh);
+        state.positions[7].y = f64::NAN;
+        assert_eq!(
+            r.render(&mesh, &state, &[], &view, &RenderOptions::default(), &mut frame),
+            Err(RenderError::NonFinite { index: 7 })
+        );
+        state.positions.pop();
+        assert!(matches!(
+            r.render(&mesh, &state, &[], &view, &RenderOptions::default(), &mut frame),
+            Err(RenderError::StateMismatch { .. })
+        ));
+        let (mesh, state) = flat_cloth();
+        let bad = RenderOptions {
+            cell_aspect: 0.0,
+            ..RenderOptions::default()
+        };
+        let e = r.render(&mesh, &state, &[], &view, &bad, &mut frame).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "cell_aspect is 0, but it must be between 0.25 and 8 (cell height / width)"
+        );
+    }
+
+    #[test]
+    fn every_mode_and_view_fills_exactly_the_frame() {
+        let (mesh, state) = flat_cloth();
+        let floor = Collider::Plane(Plane {
+            point: Vec3::zeros(),
+            normal: Vec3::y(),
+            friction: 0.5,
+        });
+        for mode in Mode::ALL {
+            for view in View::ALL {
+                let options = RenderOptions {
+                    mode,
+                    ..RenderOptions::default()
+                };
+                let frame = draw(&mesh, &state, &[floor], view, &options);
+                let text = frame.to_plain();
+                assert_eq!(text.lines().count(), 20);
+                assert!(text.lines().all(|l| l.chars().count() == 40));
+                assert!(frame.cells().iter().any(|c| c.glyph != ' ' && c.glyph != '\u{2800}'));
+            }
+        }
+    }
 }
