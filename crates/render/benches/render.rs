@@ -37,10 +37,16 @@ fn render(c: &mut Criterion) {
         ("50x50_into_200x60_top_ascii", View::Top, Mode::Ascii),
         ("50x50_into_200x60_orbit_ascii", View::Orbit, Mode::Ascii),
         ("50x50_into_200x60_top_braille", View::Top, Mode::Braille),
+        (
+            "50x50_into_200x60_top_ascii_nocolor",
+            View::Top,
+            Mode::Ascii,
+        ),
     ] {
         let spec = ViewSpec::new(view, &mesh);
         let options = RenderOptions {
             mode,
+            color: !name.ends_with("nocolor"),
             ..RenderOptions::default()
         };
         c.bench_function(name, |b| {

@@ -23,7 +23,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     });
     let (pinned, orientation, colliders) = match scene {
         "pinned2" => (vec![(0, 0), (49, 0)], Orientation::Horizontal, vec![]),
-        "pinned4" => (vec![(0, 0), (0, 49), (49, 0), (49, 49)], Orientation::Horizontal, vec![]),
+        "pinned4" => (
+            vec![(0, 0), (0, 49), (49, 0), (49, 49)],
+            Orientation::Horizontal,
+            vec![],
+        ),
         "sphere" => (
             vec![],
             Orientation::Horizontal,
@@ -45,7 +49,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let params = StepParams::default();
     let mut solver = Verlet::new();
     for _ in 0..frames {
-        advance_frame(&mut solver as &mut dyn Solver, &mesh, &colliders, &params, &mut state)?;
+        advance_frame(
+            &mut solver as &mut dyn Solver,
+            &mesh,
+            &colliders,
+            &params,
+            &mut state,
+        )?;
     }
     let mut renderer = Renderer::new();
     let mut frame = AsciiFrame::new(size);
@@ -56,7 +66,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..RenderOptions::default()
     };
     for view in views {
-        renderer.render(&mesh, &state, &colliders, &ViewSpec::new(view, &mesh), &options, &mut frame)?;
+        renderer.render(
+            &mesh,
+            &state,
+            &colliders,
+            &ViewSpec::new(view, &mesh),
+            &options,
+            &mut frame,
+        )?;
         println!("== {} ==", view.describe());
         print!("{}", frame.to_plain());
     }

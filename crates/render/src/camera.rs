@@ -38,7 +38,13 @@ pub enum View {
 
 impl View {
     /// Every view, in the order of the table in the module docs.
-    pub const ALL: [View; 5] = [View::Side, View::Top, View::Bottom, View::Front, View::Orbit];
+    pub const ALL: [View; 5] = [
+        View::Side,
+        View::Top,
+        View::Bottom,
+        View::Front,
+        View::Orbit,
+    ];
 
     /// The accepted spellings, for help and error messages.
     pub const NAMES: &'static str = "side, top, bottom, front or orbit";
@@ -189,12 +195,22 @@ impl Orbit {
             });
         }
         if !(self.yaw.is_finite() && self.pitch.is_finite()) {
-            return bad("orbit yaw/pitch", self.yaw + self.pitch, "finite angles (radians)");
+            return bad(
+                "orbit yaw/pitch",
+                self.yaw + self.pitch,
+                "finite angles (radians)",
+            );
         }
         if !(self.distance.is_finite() && self.distance > 0.0) {
-            return bad("orbit distance", self.distance, "a finite number > 0 (metres)");
+            return bad(
+                "orbit distance",
+                self.distance,
+                "a finite number > 0 (metres)",
+            );
         }
-        if !(self.vfov.is_finite() && (1f64.to_radians()..=170f64.to_radians()).contains(&self.vfov)) {
+        if !(self.vfov.is_finite()
+            && (1f64.to_radians()..=170f64.to_radians()).contains(&self.vfov))
+        {
             return bad(
                 "orbit vertical field of view",
                 self.vfov.to_degrees(),
@@ -484,7 +500,10 @@ mod tests {
         let y = cam.project(Vec3::y()).unwrap();
         let z = cam.project(Vec3::z()).unwrap();
         assert!(x.x > o.x && (x.y - o.y).abs() < 1e-12);
-        assert!(y.y < o.y, "screen rows grow downwards, so +y is a smaller row");
+        assert!(
+            y.y < o.y,
+            "screen rows grow downwards, so +y is a smaller row"
+        );
         // Looking along -z: +z is nearer, at the same pixel.
         assert!(z.depth < o.depth && (z.x - o.x).abs() < 1e-12);
     }
@@ -495,7 +514,10 @@ mod tests {
         let o = cam.project(Vec3::zeros()).unwrap();
         assert!(cam.project(Vec3::x()).unwrap().x > o.x);
         assert!(cam.project(Vec3::z()).unwrap().y > o.y);
-        assert!(cam.project(Vec3::y()).unwrap().depth < o.depth, "higher is nearer");
+        assert!(
+            cam.project(Vec3::y()).unwrap().depth < o.depth,
+            "higher is nearer"
+        );
     }
 
     #[test]
@@ -540,7 +562,10 @@ mod tests {
             let cam = Camera::new(&spec(view), &unit_box(), 40, 20, 2.0).unwrap();
             let (o, d) = cam.ray(13.5, 7.5);
             let p = cam.project(o + d * 2.0).unwrap();
-            assert!((p.x - 13.5).abs() < 1e-9 && (p.y - 7.5).abs() < 1e-9, "{view}");
+            assert!(
+                (p.x - 13.5).abs() < 1e-9 && (p.y - 7.5).abs() < 1e-9,
+                "{view}"
+            );
         }
     }
 
@@ -556,7 +581,10 @@ mod tests {
         s.orbit.distance = 0.0;
         assert!(matches!(
             Camera::new(&s, &unit_box(), 40, 20, 2.0),
-            Err(RenderError::BadOption { name: "orbit distance", .. })
+            Err(RenderError::BadOption {
+                name: "orbit distance",
+                ..
+            })
         ));
     }
 }

@@ -61,9 +61,9 @@ impl ColorChoice {
             ColorChoice::Auto => {
                 if !is_tty || no_color_env.is_some_and(|v| !v.is_empty()) {
                     ColorDepth::None
-                } else if colorterm_env
-                    .is_some_and(|v| v.eq_ignore_ascii_case("truecolor") || v.eq_ignore_ascii_case("24bit"))
-                {
+                } else if colorterm_env.is_some_and(|v| {
+                    v.eq_ignore_ascii_case("truecolor") || v.eq_ignore_ascii_case("24bit")
+                }) {
                     ColorDepth::TrueColor
                 } else {
                     ColorDepth::Ansi256
@@ -205,16 +205,25 @@ mod tests {
     #[test]
     fn auto_follows_tty_no_color_and_colorterm_but_explicit_choices_win() {
         let auto = ColorChoice::Auto;
-        assert_eq!(auto.resolve(false, None, Some("truecolor")), ColorDepth::None);
+        assert_eq!(
+            auto.resolve(false, None, Some("truecolor")),
+            ColorDepth::None
+        );
         assert_eq!(auto.resolve(true, Some("1"), None), ColorDepth::None);
         // NO_COLOR set but empty does not count (no-color.org).
         assert_eq!(auto.resolve(true, Some(""), None), ColorDepth::Ansi256);
-        assert_eq!(auto.resolve(true, None, Some("24bit")), ColorDepth::TrueColor);
+        assert_eq!(
+            auto.resolve(true, None, Some("24bit")),
+            ColorDepth::TrueColor
+        );
         assert_eq!(
             ColorChoice::Ansi16.resolve(false, Some("1"), None),
             ColorDepth::Ansi16
         );
-        assert_eq!(ColorChoice::Never.resolve(true, None, None), ColorDepth::None);
+        assert_eq!(
+            ColorChoice::Never.resolve(true, None, None),
+            ColorDepth::None
+        );
         assert_eq!("256".parse::<ColorChoice>(), Ok(ColorChoice::Ansi256));
         assert!("rainbow".parse::<ColorChoice>().is_err());
     }

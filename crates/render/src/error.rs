@@ -6,7 +6,9 @@ use crate::frame::{MAX_HEIGHT, MAX_WIDTH, MIN_HEIGHT, MIN_WIDTH};
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum RenderError {
     /// A frame size with a zero dimension.
-    #[error("frame size {width}x{height} has a zero dimension; it must be at least {MIN_WIDTH}x{MIN_HEIGHT}")]
+    #[error(
+        "frame size {width}x{height} has a zero dimension; it must be at least {MIN_WIDTH}x{MIN_HEIGHT}"
+    )]
     ZeroSize {
         /// Columns asked for.
         width: usize,
@@ -14,7 +16,9 @@ pub enum RenderError {
         height: usize,
     },
     /// A frame too small to draw anything recognisable in.
-    #[error("frame size {width}x{height} is too small to draw in; it must be at least {MIN_WIDTH}x{MIN_HEIGHT}")]
+    #[error(
+        "frame size {width}x{height} is too small to draw in; it must be at least {MIN_WIDTH}x{MIN_HEIGHT}"
+    )]
     TooSmall {
         /// Columns asked for.
         width: usize,
@@ -22,7 +26,9 @@ pub enum RenderError {
         height: usize,
     },
     /// A frame larger than any terminal (and than memory would like).
-    #[error("frame size {width}x{height} is too large; it must be at most {MAX_WIDTH}x{MAX_HEIGHT}")]
+    #[error(
+        "frame size {width}x{height} is too large; it must be at most {MAX_WIDTH}x{MAX_HEIGHT}"
+    )]
     TooLarge {
         /// Columns asked for.
         width: usize,

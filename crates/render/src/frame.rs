@@ -82,10 +82,7 @@ impl FromStr for FrameSize {
             value: s.to_owned(),
             allowed: "WIDTHxHEIGHT in character cells, e.g. 80x40",
         };
-        let (w, h) = s
-            .trim()
-            .split_once(['x', 'X'])
-            .ok_or_else(unknown)?;
+        let (w, h) = s.trim().split_once(['x', 'X']).ok_or_else(unknown)?;
         // Huge digit strings overflow usize; they are "too large", not "unknown".
         let parse = |t: &str| -> Result<usize, RenderError> {
             let t = t.trim();
@@ -199,7 +196,11 @@ impl AsciiFrame {
     pub fn put_str(&mut self, x: usize, y: usize, text: &str, fg: Option<Rgb>) {
         for (i, glyph) in text.chars().enumerate() {
             if let Some(cell) = self.get_mut(x + i, y) {
-                *cell = Cell { glyph, fg, bg: None };
+                *cell = Cell {
+                    glyph,
+                    fg,
+                    bg: None,
+                };
             }
         }
     }

@@ -159,7 +159,13 @@ impl RenderOptions {
                 })
             }
         };
-        check("cell_aspect", self.cell_aspect, 0.25, 8.0, "between 0.25 and 8 (cell height / width)")?;
+        check(
+            "cell_aspect",
+            self.cell_aspect,
+            0.25,
+            8.0,
+            "between 0.25 and 8 (cell height / width)",
+        )?;
         check("ambient", self.ambient, 0.0, 1.0, "between 0 and 1")?;
         check("diffuse", self.diffuse, 0.0, 4.0, "between 0 and 4")?;
         check("fill", self.fill, 0.0, 4.0, "between 0 and 4")?;

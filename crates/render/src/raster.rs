@@ -55,17 +55,20 @@ impl Target<'_> {
     }
 
     /// Fills the triangle `v` with `material`, interpolating the per-vertex shades `s`.
-    pub fn triangle(&mut self, v: [Projected; 3], s: [f32; 3], material: Material) {
+    /// Returns how many pixel centres it covers (drawn or hidden).
+    pub fn triangle(&mut self, v: [Projected; 3], s: [f32; 3], material: Material) -> usize {
         if v.iter().any(|p| !(p.x.abs() < LIMIT && p.y.abs() < LIMIT)) {
-            return;
+            return 0;
         }
-        let snap = |p: &Projected| ((p.x * SUB).round() as i64, (p.y * SUB).round() as i64);
+        // NOTE: truncation rather than rounding (no libm call); any rule works as long as a
+        // vertex shared by two triangles snaps to the same point in both, which it does.
+        let snap = |p: &Projected| ((p.x * SUB) as i64, (p.y * SUB) as i64);
         let (p0, mut p1, mut p2) = (snap(&v[0]), snap(&v[1]), snap(&v[2]));
         let (v0, mut v1, mut v2) = (v[0], v[1], v[2]);
         let (s0, mut s1, mut s2) = (s[0], s[1], s[2]);
         let mut area = edge(p0, p1, p2);
         if area == 0 {
-            return;
+            return 0;
         }
         if area < 0 {
             std::mem::swap(&mut p1, &mut p2);
@@ -79,7 +82,7 @@ impl Target<'_> {
         let max_x = (p0.0.max(p1.0).max(p2.0).div_euclid(sub)).min(self.width as i64 - 1);
         let max_y = (p0.1.max(p1.1).max(p2.1).div_euclid(sub)).min(self.height as i64 - 1);
         if min_x > max_x || min_y > max_y {
-            return;
+            return 0;
         }
         // Top-left rule: a pixel centre exactly on an edge belongs to the triangle only when the
         // edge is a top or left edge, which a bias of -1 on the other edges implements.
@@ -93,9 +96,18 @@ impl Target<'_> {
         let mut row1 = edge(p2, p0, start);
         let mut row2 = edge(p0, p1, start);
         // Stepping one pixel right changes an edge function by -(dy) * SUB, one down by dx * SUB.
-        let (sx0, sx1, sx2) = (-(p2.1 - p1.1) * sub, -(p0.1 - p2.1) * sub, -(p1.1 - p0.1) * sub);
-        let (sy0, sy1, sy2) = ((p2.0 - p1.0) * sub, (p0.0 - p2.0) * sub, (p1.0 - p0.0) * sub);
+        let (sx0, sx1, sx2) = (
+            -(p2.1 - p1.1) * sub,
+            -(p0.1 - p2.1) * sub,
+            -(p1.1 - p0.1) * sub,
+        );
+        let (sy0, sy1, sy2) = (
+            (p2.0 - p1.0) * sub,
+            (p0.0 - p2.0) * sub,
+            (p1.0 - p0.0) * sub,
+        );
         let inv = 1.0 / area as f64;
+        let mut covered = 0;
         for y in min_y..=max_y {
             let (mut w0, mut w1, mut w2) = (row0, row1, row2);
             for x in min_x..=max_x {
@@ -104,6 +116,7 @@ impl Target<'_> {
                     let depth = l0 * v0.depth + l1 * v1.depth + l2 * v2.depth;
                     let shade = (l0 as f32) * s0 + (l1 as f32) * s1 + (l2 as f32) * s2;
                     self.plot(x as usize, y as usize, depth, material, shade);
+                    covered += 1;
                 }
                 w0 += sx0;
                 w1 += sx1;
@@ -113,6 +126,7 @@ impl Target<'_> {
             row1 += sy1;
             row2 += sy2;
         }
+        covered
     }
 
     /// Draws a depth-tested line from `a` to `b`, one sample per pixel step, interpolating
@@ -128,10 +142,14 @@ impl Target<'_> {
         material: Material,
         only_empty: bool,
     ) {
-        if [a, b].iter().any(|p| !(p.x.abs() < LIMIT && p.y.abs() < LIMIT)) {
+        if [a, b]
+            .iter()
+            .any(|p| !(p.x.abs() < LIMIT && p.y.abs() < LIMIT))
+        {
             return;
         }
-        let steps = (b.x - a.x).abs().max((b.y - a.y).abs()).ceil().max(1.0) as usize;
+        // One sample per pixel step along the longer axis (truncation + 1 is a cheap ceiling).
+        let steps = (b.x - a.x).abs().max((b.y - a.y).abs()) as usize + 1;
         for i in 0..=steps {
             let t = i as f64 / steps as f64;
             let (x, y) = (a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t);
@@ -204,7 +222,12 @@ mod tests {
         // pixel centre inside the square is covered by exactly one of them (top-left rule).
         let (w, h) = (17, 13);
         let mut hits = vec![0u8; w * h];
-        let corners = [p(0.3, 0.7, 0.0), p(16.6, 0.2, 0.0), p(16.9, 12.8, 0.0), p(0.1, 12.4, 0.0)];
+        let corners = [
+            p(0.3, 0.7, 0.0),
+            p(16.6, 0.2, 0.0),
+            p(16.9, 12.8, 0.0),
+            p(0.1, 12.4, 0.0),
+        ];
         for tri in [[0, 1, 2], [0, 2, 3]] {
             let mut b = Buffers::new(w * h);
             let mut t = b.target(w, h);
@@ -253,13 +276,36 @@ mod tests {
     fn edge_on_and_off_screen_triangles_draw_nothing_and_do_not_panic() {
         let mut b = Buffers::new(100);
         let mut t = b.target(10, 10);
-        t.triangle([p(0.0, 5.0, 0.0), p(5.0, 5.0, 0.0), p(9.0, 5.0, 0.0)], [1.0; 3], Material::Front);
-        t.triangle([p(-50.0, -50.0, 0.0), p(-40.0, -50.0, 0.0), p(-50.0, -40.0, 0.0)], [1.0; 3], Material::Front);
-        t.triangle([p(1e30, 0.0, 0.0), p(0.0, 1e30, 0.0), p(f64::NAN, 0.0, 0.0)], [1.0; 3], Material::Front);
+        t.triangle(
+            [p(0.0, 5.0, 0.0), p(5.0, 5.0, 0.0), p(9.0, 5.0, 0.0)],
+            [1.0; 3],
+            Material::Front,
+        );
+        t.triangle(
+            [
+                p(-50.0, -50.0, 0.0),
+                p(-40.0, -50.0, 0.0),
+                p(-50.0, -40.0, 0.0),
+            ],
+            [1.0; 3],
+            Material::Front,
+        );
+        t.triangle(
+            [p(1e30, 0.0, 0.0), p(0.0, 1e30, 0.0), p(f64::NAN, 0.0, 0.0)],
+            [1.0; 3],
+            Material::Front,
+        );
         assert!(b.material.iter().all(|m| *m == Material::Empty));
         // A line covers the edge-on triangle's pixels instead.
         let mut t = b.target(10, 10);
-        t.line(p(0.0, 5.5, 0.0), p(9.9, 5.5, 0.0), 1.0, 1.0, Material::Front, false);
+        t.line(
+            p(0.0, 5.5, 0.0),
+            p(9.9, 5.5, 0.0),
+            1.0,
+            1.0,
+            Material::Front,
+            false,
+        );
         assert!((0..10).all(|x| b.material[50 + x] == Material::Front));
     }
 }

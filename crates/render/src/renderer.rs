@@ -103,7 +103,11 @@ impl Renderer {
                 points: mesh.len(),
             });
         }
-        let shown: &[Collider] = if options.show_colliders { colliders } else { &[] };
+        let shown: &[Collider] = if options.show_colliders {
+            colliders
+        } else {
+            &[]
+        };
         let solid = Bounds::of_solids(positions, shown)?;
         let content = solid.with_floors(&solid, shown);
         let patch_source = match view.extent {
@@ -132,8 +136,10 @@ impl Renderer {
         for (p, nrm) in positions.iter().zip(&self.normals) {
             self.screen.push(camera.project(*p));
             let (l, v) = (lighting.towards_light(*p), camera.towards_viewer(*p));
-            self.vertex_shade
-                .push([lighting.intensity(*nrm, l, v), lighting.intensity(-nrm, l, v)]);
+            self.vertex_shade.push([
+                lighting.intensity(*nrm, l, v),
+                lighting.intensity(-nrm, l, v),
+            ]);
         }
 
         let mut target = Target {
@@ -212,7 +218,7 @@ fn stretch(face: Material, material: &[Material], shade: &mut [f32]) {
     let mut count = 0u32;
     for (m, s) in material.iter().zip(shade.iter()) {
         if *m == face {
-            hist[((s.clamp(0.0, 1.0) * (BINS - 1) as f32).round()) as usize] += 1;
+            hist[(s.clamp(0.0, 1.0) * (BINS - 1) as f32 + 0.5) as usize] += 1;
             count += 1;
         }
     }
@@ -276,14 +282,21 @@ fn draw_cloth(
         };
         let s = [vertex_shade[a][k], vertex_shade[b][k], vertex_shade[c][k]];
         let v = [pa, pb, pc];
-        target.triangle(v, s, material);
-        // Smallest altitude of the projected triangle, pixels: twice the area over the longest
-        // side. Below one pixel the triangle may miss every pixel centre.
-        let area2 = ((pb.x - pa.x) * (pc.y - pa.y) - (pb.y - pa.y) * (pc.x - pa.x)).abs();
-        let side = |p: Projected, q: Projected| (q.x - p.x).hypot(q.y - p.y);
-        let longest = side(pa, pb).max(side(pb, pc)).max(side(pc, pa));
-        if area2 < longest {
-            for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+        let covered = target.triangle(v, s, material);
+        // A triangle whose smallest altitude (twice its area over its longest side) is under a
+        // pixel can fall between pixel centres; if it did, its longest edge, which lies within
+        // a pixel of all of it, is drawn as a line.
+        if covered == 0 {
+            let area2 = (pb.x - pa.x) * (pc.y - pa.y) - (pb.y - pa.y) * (pc.x - pa.x);
+            let side2 = |i: usize, j: usize| (v[j].x - v[i].x).powi(2) + (v[j].y - v[i].y).powi(2);
+            let (mut i, mut j, mut longest2) = (0, 1, side2(0, 1));
+            for (a, b) in [(1, 2), (2, 0)] {
+                let l = side2(a, b);
+                if l > longest2 {
+                    (i, j, longest2) = (a, b, l);
+                }
+            }
+            if area2 * area2 < longest2 {
                 target.line(v[i], v[j], s[i], s[j], material, false);
             }
         }
@@ -292,8 +305,17 @@ fn draw_cloth(
 
 /// The projected pixel box of `corners`, clipped to the target; the whole target when a
 /// corner is behind the camera.
-fn pixel_box(target: &Target<'_>, camera: &Camera, corners: &[Vec3]) -> (usize, usize, usize, usize) {
-    let (mut x0, mut y0, mut x1, mut y1) = (f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+fn pixel_box(
+    target: &Target<'_>,
+    camera: &Camera,
+    corners: &[Vec3],
+) -> (usize, usize, usize, usize) {
+    let (mut x0, mut y0, mut x1, mut y1) = (
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    );
     for c in corners {
         let Some(p) = camera.project(*c) else {
             return (0, 0, target.width, target.height);
@@ -396,8 +418,10 @@ fn draw_floor(target: &mut Target<'_>, camera: &Camera, plane: &Plane, over: &Bo
     }
     if !camera.is_perspective() && n.dot(&camera.forward()).abs() < 0.2 {
         for i in 0..4 {
-            let (Some(p), Some(q)) = (camera.project(corners[i]), camera.project(corners[(i + 1) % 4]))
-            else {
+            let (Some(p), Some(q)) = (
+                camera.project(corners[i]),
+                camera.project(corners[(i + 1) % 4]),
+            ) else {
                 continue;
             };
             target.line(p, q, 0.5, 0.5, Material::FloorEdge, true);
@@ -421,9 +445,9 @@ fn colour(material: Material, shade: f32) -> Option<Rgb> {
     let scaled = |base: (f32, f32, f32)| {
         let k = 0.3 + 0.7 * shade.clamp(0.0, 1.0);
         Rgb(
-            (base.0 * k).round() as u8,
-            (base.1 * k).round() as u8,
-            (base.2 * k).round() as u8,
+            (base.0 * k + 0.5) as u8,
+            (base.1 * k + 0.5) as u8,
+            (base.2 * k + 0.5) as u8,
         )
     };
     match material {
@@ -469,7 +493,8 @@ fn compose(
                 }
                 Mode::Braille => {
                     // Dot bits of U+2800 by (column, row) within the 2 x 4 cell.
-                    const BITS: [[u32; 4]; 2] = [[0x01, 0x02, 0x04, 0x40], [0x08, 0x10, 0x20, 0x80]];
+                    const BITS: [[u32; 4]; 2] =
+                        [[0x01, 0x02, 0x04, 0x40], [0x08, 0x10, 0x20, 0x80]];
                     let mut bits = 0;
                     let mut fg = None;
                     for (dx, column) in BITS.iter().enumerate() {
@@ -579,7 +604,14 @@ mod tests {
     ) -> AsciiFrame {
         let mut frame = AsciiFrame::new(FrameSize::new(40, 20).unwrap());
         Renderer::new()
-            .render(mesh, state, colliders, &ViewSpec::new(view, mesh), options, &mut frame)
+            .render(
+                mesh,
+                state,
+                colliders,
+                &ViewSpec::new(view, mesh),
+                options,
+                &mut frame,
+            )
             .unwrap();
         frame
     }
@@ -598,11 +630,20 @@ mod tests {
         for y in 1..19 {
             for x in 3..37 {
                 let g = frame.get(x, y).unwrap().glyph;
-                assert!(FRONT_RAMP.contains(&g) || g == PIN_GLYPH, "({x}, {y}) = {g:?}\n{}", glyphs(&frame));
+                assert!(
+                    FRONT_RAMP.contains(&g) || g == PIN_GLYPH,
+                    "({x}, {y}) = {g:?}\n{}",
+                    glyphs(&frame)
+                );
             }
         }
         // The margin stays empty.
-        assert!(frame.row(0).iter().all(|c| c.glyph == ' ' || c.glyph == PIN_GLYPH));
+        assert!(
+            frame
+                .row(0)
+                .iter()
+                .all(|c| c.glyph == ' ' || c.glyph == PIN_GLYPH)
+        );
         assert_eq!(frame.get(0, 10).unwrap().glyph, ' ');
     }
 
@@ -618,7 +659,10 @@ mod tests {
             ..RenderOptions::default()
         };
         let frame = draw(&mesh, &state, &[], View::Bottom, &one_sided);
-        assert!(frame.cells().iter().all(|c| c.glyph == ' '), "back faces culled");
+        assert!(
+            frame.cells().iter().all(|c| c.glyph == ' '),
+            "back faces culled"
+        );
     }
 
     #[test]
@@ -644,7 +688,12 @@ mod tests {
             });
             let frame = draw(&mesh, &state, &[ball], View::Top, &options);
             let g = frame.get(20, 10).unwrap().glyph;
-            assert_eq!(SPHERE_RAMP.contains(&g), expect_sphere, "{g:?}\n{}", glyphs(&frame));
+            assert_eq!(
+                SPHERE_RAMP.contains(&g),
+                expect_sphere,
+                "{g:?}\n{}",
+                glyphs(&frame)
+            );
             assert_eq!(FRONT_RAMP.contains(&g), !expect_sphere);
         }
     }
@@ -703,12 +752,26 @@ mod tests {
         let view = ViewSpec::new(View::Side, &mesh);
         state.positions[7].y = f64::NAN;
         assert_eq!(
-            r.render(&mesh, &state, &[], &view, &RenderOptions::default(), &mut frame),
+            r.render(
+                &mesh,
+                &state,
+                &[],
+                &view,
+                &RenderOptions::default(),
+                &mut frame
+            ),
             Err(RenderError::NonFinite { index: 7 })
         );
         state.positions.pop();
         assert!(matches!(
-            r.render(&mesh, &state, &[], &view, &RenderOptions::default(), &mut frame),
+            r.render(
+                &mesh,
+                &state,
+                &[],
+                &view,
+                &RenderOptions::default(),
+                &mut frame
+            ),
             Err(RenderError::StateMismatch { .. })
         ));
         let (mesh, state) = flat_cloth();
@@ -716,7 +779,9 @@ mod tests {
             cell_aspect: 0.0,
             ..RenderOptions::default()
         };
-        let e = r.render(&mesh, &state, &[], &view, &bad, &mut frame).unwrap_err();
+        let e = r
+            .render(&mesh, &state, &[], &view, &bad, &mut frame)
+            .unwrap_err();
         assert_eq!(
             e.to_string(),
             "cell_aspect is 0, but it must be between 0.25 and 8 (cell height / width)"
@@ -741,7 +806,12 @@ mod tests {
                 let text = frame.to_plain();
                 assert_eq!(text.lines().count(), 20);
                 assert!(text.lines().all(|l| l.chars().count() == 40));
-                assert!(frame.cells().iter().any(|c| c.glyph != ' ' && c.glyph != '\u{2800}'));
+                assert!(
+                    frame
+                        .cells()
+                        .iter()
+                        .any(|c| c.glyph != ' ' && c.glyph != '\u{2800}')
+                );
             }
         }
     }

@@ -56,9 +56,7 @@ fn a_warm_renderer_draws_every_mode_and_view_without_allocating() {
     let mut text = String::with_capacity(1 << 20);
     let jobs: Vec<(ViewSpec, RenderOptions)> = Mode::ALL
         .into_iter()
-        .flat_map(|mode| {
-            View::ALL.into_iter().map(move |view| (view, mode))
-        })
+        .flat_map(|mode| View::ALL.into_iter().map(move |view| (view, mode)))
         .map(|(view, mode)| {
             (
                 ViewSpec::new(view, &mesh),

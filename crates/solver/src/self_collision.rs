@@ -30,7 +30,7 @@ impl SpatialHash {
         // 21 bits per axis, offset so negative boxes stay distinct; a box index beyond +-2^20
         // (a cloth a million boxes away) wraps, which only merges far-apart boxes: harmless,
         // the distance test still rejects the pairs.
-        let q = |v: f64, s: f64| ((v / s).floor() as i64 + (1 << 20)) as u64 & 0x1F_FFFF;
+        let q = |v: f64, s: f64| ((v / s).floor() as i64).wrapping_add(1 << 20) as u64 & 0x1F_FFFF;
         (q(p.x, w) << 42) | (q(p.y, h) << 21) | q(p.z, t)
     }
 
