@@ -2,7 +2,7 @@
 
 use clap::{Parser, Subcommand};
 
-use crate::{app, scenes, simulate};
+use crate::{app, render, scenes, simulate};
 
 /// A CS184 mass-spring cloth simulator in the terminal.
 #[derive(Debug, Parser)]
@@ -19,6 +19,8 @@ enum Command {
     Tui(app::Args),
     /// Run a scene headless and write the final state (JSON, or OBJ for a `.obj` file).
     Simulate(simulate::Args),
+    /// Run a scene headless and print frames as text (plain, or ANSI colour).
+    Render(render::Args),
     /// List the bundled scenes.
     Scenes,
 }
@@ -29,6 +31,7 @@ impl Cli {
         match self.command {
             Some(Command::Tui(args)) => app::run(&args),
             Some(Command::Simulate(args)) => simulate::run(&args),
+            Some(Command::Render(args)) => render::run(&args),
             Some(Command::Scenes) => {
                 scenes::run();
                 Ok(())

@@ -1,12 +1,13 @@
 //! `clothsim`: the CS184 mass-spring cloth in the terminal.
 //!
 //! With no arguments it opens the live terminal UI on the bundled `pinned4` scene; subcommands
-//! run headless (`simulate`, `scenes`). Every error ends as one clear message on stderr and a
+//! run headless (`simulate`, `render`, `scenes`). Every error ends as one clear message on stderr and a
 //! non-zero exit code; nothing here panics on bad input.
 
 mod app;
 mod cli;
 mod output;
+mod render;
 mod scenes;
 mod simulate;
 mod solvers;
