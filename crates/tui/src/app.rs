@@ -90,6 +90,9 @@ pub fn build(args: &Args, is_tty: bool) -> anyhow::Result<App> {
         .color
         .resolve(is_tty, no_color.as_deref(), colorterm.as_deref());
     app.color_allowed = depth != ColorDepth::None;
+    if depth != ColorDepth::None {
+        app.depth = depth;
+    }
     // NOTE: per-cell cloth colour multiplies the bytes per frame; under `auto` only the
     // interface is coloured and the cloth stays in glyphs (C turns its colour on).
     app.color = args.color != ColorChoice::Auto && depth != ColorDepth::None;

@@ -152,7 +152,7 @@ pub const KEYMAP: &[Binding] = &[
     },
     Binding {
         keys: &[key(KeyCode::Esc)],
-        help: "close the open overlay or prompt; quit when nothing is open",
+        help: "close the overlay or prompt; else quit",
         footer: None,
         group: Group::General,
         message: Message::Escape,
@@ -173,21 +173,21 @@ pub const KEYMAP: &[Binding] = &[
     },
     Binding {
         keys: &[ch('r')],
-        help: "reset the cloth to its start (keeps the parameters)",
+        help: "reset the cloth, keep the parameters",
         footer: Some(("r", "reset")),
         group: Group::Simulation,
         message: Message::Reset,
     },
     Binding {
         keys: &[ch('+'), ch('=')],
-        help: "run simulated time faster (x2)",
+        help: "simulated time faster (x2)",
         footer: None,
         group: Group::Simulation,
         message: Message::Faster,
     },
     Binding {
         keys: &[ch('-')],
-        help: "run simulated time slower (/2)",
+        help: "simulated time slower (/2)",
         footer: Some(("+/-", "speed")),
         group: Group::Simulation,
         message: Message::Slower,
@@ -208,7 +208,7 @@ pub const KEYMAP: &[Binding] = &[
     },
     Binding {
         keys: &[key(KeyCode::Left), ch('h')],
-        help: "decrease the parameter (ks, density: by 2^(1/4); toggles flip)",
+        help: "decrease (ks, density: / 2^(1/4); flip toggles)",
         footer: None,
         group: Group::Parameters,
         message: Message::Nudge {
@@ -228,7 +228,7 @@ pub const KEYMAP: &[Binding] = &[
     },
     Binding {
         keys: &[shift(KeyCode::Left), ch('H')],
-        help: "decrease in coarse steps (ks, density: halve)",
+        help: "decrease coarsely (ks, density: halve)",
         footer: None,
         group: Group::Parameters,
         message: Message::Nudge {
@@ -238,7 +238,7 @@ pub const KEYMAP: &[Binding] = &[
     },
     Binding {
         keys: &[shift(KeyCode::Right), ch('L')],
-        help: "increase in coarse steps (ks, density: double)",
+        help: "increase coarsely (ks, density: double)",
         footer: None,
         group: Group::Parameters,
         message: Message::Nudge {
@@ -248,21 +248,21 @@ pub const KEYMAP: &[Binding] = &[
     },
     Binding {
         keys: &[key(KeyCode::Enter)],
-        help: "type an exact value for the parameter",
+        help: "type an exact value",
         footer: Some(("Enter", "edit")),
         group: Group::Parameters,
         message: Message::EditValue,
     },
     Binding {
         keys: &[ch('u')],
-        help: "restore the parameter to the scene's value",
+        help: "restore the scene's value",
         footer: Some(("u", "undo")),
         group: Group::Parameters,
         message: Message::RestoreParam,
     },
     Binding {
         keys: &[ch('U')],
-        help: "restore every parameter to the scene's values",
+        help: "restore all parameters to the scene's",
         footer: None,
         group: Group::Parameters,
         message: Message::RestoreAll,
@@ -276,7 +276,7 @@ pub const KEYMAP: &[Binding] = &[
     },
     Binding {
         keys: &[ch('f')],
-        help: "maximise the focused pane / back to the layout",
+        help: "maximise the focused pane / back",
         footer: Some(("f", "max")),
         group: Group::Views,
         message: Message::ToggleMaximise,
@@ -297,7 +297,7 @@ pub const KEYMAP: &[Binding] = &[
     },
     Binding {
         keys: &[ch('c')],
-        help: "change the focused pane's view (side, top, bottom, front, orbit)",
+        help: "next view in the focused pane (side, top...)",
         footer: Some(("c", "view")),
         group: Group::Views,
         message: Message::CycleView,
@@ -386,7 +386,7 @@ pub const KEYMAP: &[Binding] = &[
     },
     Binding {
         keys: &[ch('S')],
-        help: "save the scene with the edited parameters to a JSON file",
+        help: "save the scene with its edits as JSON",
         footer: Some(("S", "save")),
         group: Group::General,
         message: Message::Save,

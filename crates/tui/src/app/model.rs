@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use cloth_render::{AsciiFrame, Bounds, Mode, Orbit, Renderer, View};
+use cloth_render::{AsciiFrame, Bounds, ColorDepth, Mode, Orbit, Renderer, View};
 
 use super::sim::Simulation;
 
@@ -188,6 +188,8 @@ pub struct App {
     pub color: bool,
     /// Whether the terminal may show colour at all (false under `NO_COLOR` or `--color never`).
     pub color_allowed: bool,
+    /// How many colours the cloth's colour uses when on.
+    pub depth: ColorDepth,
     /// The message line.
     pub note: Option<Note>,
     /// Loop measurements.
@@ -227,6 +229,7 @@ impl App {
             mode: Mode::default(),
             color: false,
             color_allowed: false,
+            depth: ColorDepth::TrueColor,
             note: None,
             stats: Stats::default(),
             screen: (80, 24),

@@ -1,7 +1,9 @@
 //! The cloth panes: render each visible pane with `cloth-render` into the model (before the
 //! pure view draws), and the widget that copies an [`AsciiFrame`] into a ratatui buffer.
 
-use cloth_render::{AsciiFrame, Bounds, Extent, FrameSize, RenderOptions, Rgb, View, ViewSpec};
+use cloth_render::{
+    AsciiFrame, Bounds, ColorDepth, Extent, FrameSize, RenderOptions, Rgb, View, ViewSpec,
+};
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::style::Color;
@@ -62,21 +64,39 @@ pub fn prepare(app: &mut App, area: Rect) {
     }
 }
 
-/// Draws an [`AsciiFrame`] into a ratatui buffer, cell for cell, with its colours when on.
+/// Draws an [`AsciiFrame`] into a ratatui buffer, cell for cell, with its colours at `depth`
+/// ([`ColorDepth::None`]: glyphs only).
 pub struct AsciiView<'a> {
     frame: &'a AsciiFrame,
-    color: bool,
+    depth: ColorDepth,
 }
 
 impl<'a> AsciiView<'a> {
     /// The widget for `frame`.
-    pub fn new(frame: &'a AsciiFrame, color: bool) -> Self {
-        Self { frame, color }
+    pub fn new(frame: &'a AsciiFrame, depth: ColorDepth) -> Self {
+        Self { frame, depth }
     }
 }
 
-fn rgb(c: Rgb) -> Color {
-    Color::Rgb(c.0, c.1, c.2)
+/// The colour a terminal of `depth` is told: 24-bit as is, otherwise the nearest entry of the
+/// xterm 6 x 6 x 6 colour cube (which 16-colour terminals also map to their palette).
+fn terminal_color(c: Rgb, depth: ColorDepth) -> Color {
+    match depth {
+        ColorDepth::TrueColor | ColorDepth::None => Color::Rgb(c.0, c.1, c.2),
+        ColorDepth::Ansi256 | ColorDepth::Ansi16 => {
+            // Cube levels are 0, 95, 135, 175, 215, 255: level i >= 1 sits at 55 + 40 i.
+            let level = |v: u8| -> u8 {
+                if v < 48 {
+                    0
+                } else if v < 115 {
+                    1
+                } else {
+                    ((u16::from(v) - 35) / 40).min(5) as u8
+                }
+            };
+            Color::Indexed(16 + 36 * level(c.0) + 6 * level(c.1) + level(c.2))
+        }
+    }
 }
 
 impl Widget for AsciiView<'_> {
@@ -89,12 +109,12 @@ impl Widget for AsciiView<'_> {
                     continue;
                 };
                 cell.set_char(c.glyph);
-                if self.color {
+                if self.depth != ColorDepth::None {
                     if let Some(fg) = c.fg {
-                        cell.set_fg(rgb(fg));
+                        cell.set_fg(terminal_color(fg, self.depth));
                     }
                     if let Some(bg) = c.bg {
-                        cell.set_bg(rgb(bg));
+                        cell.set_bg(terminal_color(bg, self.depth));
                     }
                 }
             }

@@ -434,7 +434,7 @@ impl Param {
 }
 
 /// A range bound for messages: whole numbers without decimals.
-fn fmt_number(v: f64) -> String {
+pub fn fmt_number(v: f64) -> String {
     if v.fract() == 0.0 && v.abs() < 1.0e7 {
         format!("{v:.0}")
     } else {

@@ -198,38 +198,45 @@ impl Simulation {
             .map(|(p, l)| (p - l).norm())
             .fold(0.0, f64::max)
             / dt;
-        let sample = self.sample();
+        let sample = self.measure();
         if !(speed.is_finite() && sample.kinetic.is_finite() && sample.stretch.is_finite()) {
             return Err(self.fail("the cloth's state is no longer finite".to_owned()));
         }
         if speed > MAX_SPEED {
             return Err(self.fail(format!(
-                "the cloth exploded: a point moves at {speed:.0} m/s (more than {MAX_SPEED:.0} m/s)"
+                "the cloth exploded: a point moves at {} m/s (more than {MAX_SPEED:.0} m/s)",
+                short(speed)
             )));
         }
         if sample.stretch > MAX_STRETCH_RATIO {
             return Err(self.fail(format!(
-                "the cloth exploded: a spring is stretched to {:.1} times its rest length",
-                sample.stretch
+                "the cloth exploded: a spring is stretched to {} times its rest length",
+                short(sample.stretch)
             )));
         }
+        self.push(sample);
         self.last_good.clone_from(&self.state);
         Ok(())
     }
 
-    fn sample(&mut self) -> Sample {
-        let s = Sample {
+    fn measure(&self) -> Sample {
+        Sample {
             time: self.time,
             kinetic: kinetic_energy(&self.state, self.point_mass(), self.dt()),
             stretch: max_stretch_ratio(&self.scene.mesh, &self.state),
-        };
-        if s.kinetic.is_finite() && s.stretch.is_finite() {
-            if self.history.len() == HISTORY {
-                self.history.pop_front();
-            }
-            self.history.push_back(s);
         }
-        s
+    }
+
+    fn push(&mut self, s: Sample) {
+        if self.history.len() == HISTORY {
+            self.history.pop_front();
+        }
+        self.history.push_back(s);
+    }
+
+    fn sample(&mut self) {
+        let s = self.measure();
+        self.push(s);
     }
 
     fn fail(&mut self, what: String) -> Fault {
@@ -258,5 +265,14 @@ impl Simulation {
                 p.ks
             )
         })
+    }
+}
+
+/// A possibly huge number, readable: `123`, `4.6e12`.
+fn short(v: f64) -> String {
+    if v.abs() < 1.0e4 {
+        format!("{v:.1}")
+    } else {
+        format!("{v:.1e}")
     }
 }

@@ -71,7 +71,12 @@ fn pane(app: &App, f: &mut Frame, slot: usize, rect: Rect, theme: &Theme) {
             if frame.width() == inside.width as usize
                 && frame.height() == inside.height as usize =>
         {
-            f.render_widget(AsciiView::new(frame, app.color), inside);
+            let depth = if app.color {
+                app.depth
+            } else {
+                cloth_render::ColorDepth::None
+            };
+            f.render_widget(AsciiView::new(frame, depth), inside);
         }
         Some(_) | None => {
             if inside.width < cloth_render::MIN_WIDTH as u16

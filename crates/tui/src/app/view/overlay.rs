@@ -10,7 +10,7 @@ use ratatui::widgets::{Block, Clear, Paragraph, Wrap};
 use crate::app::keymap::{Group, KEYMAP, keys_label};
 use crate::app::layout::{MIN_HEIGHT, MIN_WIDTH};
 use crate::app::model::{App, Prompt, Purpose};
-use crate::app::params::{Kind, PARAMS};
+use crate::app::params::{Kind, PARAMS, fmt_number};
 use crate::app::theme::Theme;
 
 /// A box of `w` x `h` centred in `area` (clipped to it), cleared and bordered.
@@ -58,9 +58,15 @@ pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
         v
     };
     let all: Vec<Vec<Line>> = Group::ALL.iter().map(|&g| group_lines(g)).collect();
-    let widest = KEYMAP.iter().map(|b| b.help.len()).max().unwrap_or(40) + key_w + 4;
+    let widest = KEYMAP
+        .iter()
+        .map(|b| b.help.chars().count())
+        .max()
+        .unwrap_or(40)
+        + key_w
+        + 4;
     let total: usize = all.iter().map(Vec::len).sum();
-    let two = area.width as usize >= 2 * widest + 6;
+    let two = area.width as usize >= 2 * widest + 3;
     let (left, right): (Vec<Line>, Vec<Line>) = if two {
         // Split the groups where the left column holds about half the lines.
         let mut l = Vec::new();
@@ -78,7 +84,7 @@ pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     };
     let rows = left.len().max(right.len()) as u16 + 1;
     let w = if two {
-        2 * widest as u16 + 5
+        2 * widest as u16 + 3
     } else {
         widest as u16 + 2
     };
@@ -154,8 +160,8 @@ pub fn prompt(app: &App, f: &mut Frame, area: Rect, p: &Prompt, theme: &Theme) {
                 Kind::Number { min, max, .. } => format!(
                     "{}: a value from {} to {} {}",
                     param.label,
-                    param.format(Some(min)),
-                    param.format(Some(max)),
+                    fmt_number(min),
+                    fmt_number(max),
                     param.unit
                 ),
                 _ => param.label.to_owned(),
@@ -261,11 +267,16 @@ pub fn fault(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
         lines.insert(2, Line::styled(format!("Likely cause: {w}."), theme.warn));
     }
     let w = area.width.saturating_sub(4).min(90);
+    let text_w = usize::from(w.saturating_sub(2)).max(1);
+    let rows: usize = lines
+        .iter()
+        .map(|l| l.width().max(1).div_ceil(text_w))
+        .sum();
     let inside = boxed(
         f,
         area,
         w,
-        lines.len() as u16 + 6,
+        rows as u16 + 2,
         "simulation stopped",
         theme.error,
     );
@@ -275,12 +286,12 @@ pub fn fault(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
 /// The whole screen, when it is too small for the layout.
 pub fn too_small(f: &mut Frame, area: Rect, theme: &Theme) {
     let lines = vec![
-        Line::styled("terminal too small", theme.warn),
         Line::styled(
-            format!(
-                "clothsim needs at least {MIN_WIDTH} x {MIN_HEIGHT}; this one is {} x {}.",
-                area.width, area.height
-            ),
+            format!("terminal too small: {} x {}", area.width, area.height),
+            theme.warn,
+        ),
+        Line::styled(
+            format!("clothsim needs at least {MIN_WIDTH} x {MIN_HEIGHT}."),
             theme.text,
         ),
         Line::styled("Enlarge the window, or press q to quit.", theme.text),

@@ -38,9 +38,8 @@ pub fn plots(app: &App, f: &mut Frame, areas: [Rect; 2], theme: &Theme) {
             })
             .collect();
         let title = format!(
-            " kinetic energy {} J (top {}) ",
-            sci(last.map_or(0.0, |s| s.kinetic)),
-            sci(top)
+            " kinetic energy {} J ",
+            sci(last.map_or(0.0, |s| s.kinetic))
         );
         f.render_widget(
             Sparkline::default()
@@ -72,7 +71,7 @@ pub fn plots(app: &App, f: &mut Frame, areas: [Rect; 2], theme: &Theme) {
             .map(|&s| ((s - 1.0).max(0.0) / (top - 1.0) * LEVELS).round() as u64)
             .collect();
         let title = format!(
-            " max stretch {:.3} (limit {MAX_STRETCH:.2}) ",
+            " max stretch {:.3} (limit {MAX_STRETCH}) ",
             last.map_or(1.0, |s| s.stretch)
         );
         f.render_widget(
