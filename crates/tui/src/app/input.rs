@@ -16,7 +16,7 @@ use super::model::{App, Overlay};
 pub fn message(app: &App, event: &Event) -> Option<Message> {
     match event {
         Event::Key(k) if k.kind != KeyEventKind::Release => key(app, k),
-        Event::Mouse(m) if app.overlay == Overlay::None => mouse(m),
+        Event::Mouse(m) if app.overlay == Overlay::None => mouse(*m),
         Event::Resize(width, height) => Some(Message::Resize {
             width: *width,
             height: *height,
@@ -86,7 +86,7 @@ fn key(app: &App, k: &KeyEvent) -> Option<Message> {
     }
 }
 
-fn mouse(m: &MouseEvent) -> Option<Message> {
+fn mouse(m: MouseEvent) -> Option<Message> {
     let (col, row) = (m.column, m.row);
     match m.kind {
         MouseEventKind::Down(MouseButton::Left) => Some(Message::MouseDown { col, row }),

@@ -132,6 +132,10 @@ pub struct Stats {
     pub draws_per_sec: f64,
     /// Whether the simulation could not keep up and dropped owed time.
     pub lagging: bool,
+    /// Wall time per drawn frame (render + draw + write), ms.
+    pub draw_ms: f64,
+    /// Wall time the simulation may use per loop turn, ms.
+    pub budget_ms: f64,
 }
 
 /// What to show in each pane slot at start: side and top first (the two-pane default).

@@ -21,11 +21,10 @@ pub fn prepare(app: &mut App, area: Rect) {
         return;
     };
     let sim = &app.sim;
-    match Bounds::of_scene(&sim.state.positions, &sim.settings.colliders) {
-        Ok(b) => app.extent = Some(app.extent.map_or(b, |e| e.union(&b))),
-        // A non-finite state never reaches here (the simulation puts back its last good
-        // frame); keep the old extent if it does.
-        Err(_) => {}
+    // NOTE: a non-finite state never reaches here (the simulation puts back its last good
+    // frame); should one, the old extent stays.
+    if let Ok(b) = Bounds::of_scene(&sim.state.positions, &sim.settings.colliders) {
+        app.extent = Some(app.extent.map_or(b, |e| e.union(&b)));
     }
     let options = RenderOptions {
         mode: app.mode,

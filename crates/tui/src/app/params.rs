@@ -76,8 +76,8 @@ const LOG_FINE: f64 = 1.189_207_115_002_721; // 2^(1/4)
 /// Coarse log step: one press doubles the value.
 const LOG_COARSE: f64 = 2.0;
 
-fn flag(b: bool) -> Option<f64> {
-    Some(if b { 1.0 } else { 0.0 })
+fn flag(b: bool) -> f64 {
+    if b { 1.0 } else { 0.0 }
 }
 
 fn sphere_friction(s: &Settings) -> Option<f64> {
@@ -216,7 +216,7 @@ pub const PARAMS: &[Param] = &[
         unit: "",
         help: "whether structural springs (grid neighbours) exert forces",
         kind: Kind::Toggle,
-        get: |s| flag(s.params.structural),
+        get: |s| Some(flag(s.params.structural)),
         set: |s, v| s.params.structural = v != 0.0,
     },
     Param {
@@ -224,7 +224,7 @@ pub const PARAMS: &[Param] = &[
         unit: "",
         help: "whether shearing springs (diagonal neighbours) exert forces",
         kind: Kind::Toggle,
-        get: |s| flag(s.params.shearing),
+        get: |s| Some(flag(s.params.shearing)),
         set: |s, v| s.params.shearing = v != 0.0,
     },
     Param {
@@ -232,7 +232,7 @@ pub const PARAMS: &[Param] = &[
         unit: "",
         help: "whether bending springs (two apart) exert forces",
         kind: Kind::Toggle,
-        get: |s| flag(s.params.bending),
+        get: |s| Some(flag(s.params.bending)),
         set: |s, v| s.params.bending = v != 0.0,
     },
     Param {
@@ -272,7 +272,7 @@ pub const PARAMS: &[Param] = &[
         unit: "",
         help: "points repel each other closer than twice the thickness",
         kind: Kind::Toggle,
-        get: |s| flag(s.params.self_collision),
+        get: |s| Some(flag(s.params.self_collision)),
         set: |s, v| s.params.self_collision = v != 0.0,
     },
     Param {
@@ -296,7 +296,7 @@ pub const PARAMS: &[Param] = &[
         unit: "",
         help: "the course's constraint: springs end each step at most 10% over rest length",
         kind: Kind::Toggle,
-        get: |s| flag(s.params.stretch_limit),
+        get: |s| Some(flag(s.params.stretch_limit)),
         set: |s, v| s.params.stretch_limit = v != 0.0,
     },
     Param {
@@ -421,7 +421,7 @@ impl Param {
     pub fn format(&self, value: Option<f64>) -> String {
         match (self.kind, value) {
             (_, None) | (Kind::Solver, _) => "-".to_owned(),
-            (Kind::Toggle, Some(v)) => if v != 0.0 { "on" } else { "off" }.to_owned(),
+            (Kind::Toggle, Some(v)) => if v == 0.0 { "off" } else { "on" }.to_owned(),
             (Kind::Number { decimals, .. }, Some(v)) => {
                 if v.abs() >= 1.0e7 {
                     format!("{v:.3e}")

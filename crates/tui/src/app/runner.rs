@@ -5,6 +5,11 @@
 //! steps of `dt`), run owed steps for at most [`BUDGET`] of a frame interval and forgive the
 //! rest (the status line then shows a real-time factor below 1), and draw if anything changed
 //! and a frame is due. So however slow the simulation, input and drawing keep their pace.
+//!
+//! The budget adapts: it is the frame interval minus what drawing measurably costs (with a
+//! margin for input), between [`MIN_BUDGET`] and [`MAX_BUDGET`] of the interval. A fixed 55 %
+//! would waste idle time when drawing is cheap (pinned4's solver alone needs about two
+//! thirds of real time on one core), and starve drawing when it is not.
 
 use std::io::stdout;
 use std::time::{Duration, Instant};
@@ -19,11 +24,16 @@ use ratatui::layout::Rect;
 use super::model::{App, Stats};
 use super::{Message, input, panes, update, view};
 
-/// Share of a frame interval the simulation may use; the rest is for input and drawing.
-pub const BUDGET: f64 = 0.55;
+/// Smallest share of a frame interval the simulation gets.
+pub const MIN_BUDGET: f64 = 0.3;
+/// Largest share of a frame interval the simulation gets; the rest is always left for input
+/// and drawing.
+pub const MAX_BUDGET: f64 = 0.8;
+/// Wall time kept free for reading input and for jitter, besides the measured drawing cost.
+const MARGIN: Duration = Duration::from_millis(2);
 
 /// How often the measurements refresh.
-const WINDOW: Duration = Duration::from_millis(1000);
+const WINDOW: Duration = Duration::from_secs(1);
 
 /// How long to sleep waiting for input when nothing is running or pending.
 const IDLE: Duration = Duration::from_millis(500);
@@ -57,6 +67,7 @@ struct Meter {
     steps: u64,
     sim_time: f64,
     draws: u32,
+    draw_time: Duration,
     lagging: bool,
 }
 
@@ -67,12 +78,13 @@ impl Meter {
             steps: 0,
             sim_time: 0.0,
             draws: 0,
+            draw_time: Duration::ZERO,
             lagging: false,
         }
     }
 
     /// The stats when the window is over (and a new window).
-    fn take(&mut self, now: Instant) -> Option<Stats> {
+    fn take(&mut self, now: Instant, budget: Duration) -> Option<Stats> {
         let wall = now.duration_since(self.start);
         if wall < WINDOW {
             return None;
@@ -83,6 +95,12 @@ impl Meter {
             steps_per_sec: self.steps as f64 / s,
             draws_per_sec: f64::from(self.draws) / s,
             lagging: self.lagging,
+            draw_ms: if self.draws > 0 {
+                self.draw_time.as_secs_f64() * 1e3 / f64::from(self.draws)
+            } else {
+                0.0
+            },
+            budget_ms: budget.as_secs_f64() * 1e3,
         };
         *self = Self::new(now);
         Some(stats)
@@ -91,7 +109,9 @@ impl Meter {
 
 fn event_loop(terminal: &mut DefaultTerminal, app: &mut App, fps: u32) -> anyhow::Result<()> {
     let interval = Duration::from_secs_f64(1.0 / f64::from(fps));
-    let budget = interval.mul_f64(BUDGET);
+    let mut budget = interval.mul_f64(MAX_BUDGET);
+    // Smoothed cost of one draw (exponential average over about 8 frames).
+    let mut draw_cost = Duration::ZERO;
     let size = terminal.size()?;
     update(
         app,
@@ -144,7 +164,7 @@ fn event_loop(terminal: &mut DefaultTerminal, app: &mut App, fps: u32) -> anyhow
             app.debt = 0.0;
             meter.lagging = true;
         }
-        if let Some(stats) = meter.take(now) {
+        if let Some(stats) = meter.take(now, budget) {
             if stats != app.stats {
                 update(app, Message::Measured(stats));
                 dirty = true;
@@ -159,7 +179,13 @@ fn event_loop(terminal: &mut DefaultTerminal, app: &mut App, fps: u32) -> anyhow
             terminal.draw(|f| view(app, f))?;
             execute!(terminal.backend_mut(), EndSynchronizedUpdate)?;
             dirty = false;
+            let cost = now.elapsed();
             meter.draws += 1;
+            meter.draw_time += cost;
+            draw_cost = (draw_cost * 7 + cost) / 8;
+            budget = interval
+                .saturating_sub(draw_cost + MARGIN)
+                .clamp(interval.mul_f64(MIN_BUDGET), interval.mul_f64(MAX_BUDGET));
             next_draw += interval;
             if next_draw < now {
                 next_draw = now + interval;

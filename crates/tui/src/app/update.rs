@@ -281,18 +281,17 @@ fn reset(app: &mut App) {
 
 fn nudge(app: &mut App, dir: i32, coarse: bool) {
     let p = &PARAMS[app.selected];
-    match p.kind {
-        Kind::Solver => cycle_solver(app, dir),
-        _ => {
-            let Some(v) = (p.get)(&app.sim.settings) else {
-                app.say(Level::Warn, absent(p.label));
-                return;
-            };
-            let nv = p.nudged(v, dir, coarse);
-            (p.set)(&mut app.sim.settings, nv);
-            changed(app, app.selected);
-        }
+    if p.kind == Kind::Solver {
+        cycle_solver(app, dir);
+        return;
     }
+    let Some(v) = (p.get)(&app.sim.settings) else {
+        app.say(Level::Warn, absent(p.label));
+        return;
+    };
+    let nv = p.nudged(v, dir, coarse);
+    (p.set)(&mut app.sim.settings, nv);
+    changed(app, app.selected);
 }
 
 fn absent(label: &str) -> String {

@@ -36,16 +36,15 @@ pub fn params(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     let value_w = (inside.width as usize).saturating_sub(LABEL + 2 + 7).max(4);
     let mut lines = Vec::with_capacity(list_h as usize);
     for (i, p) in PARAMS.iter().enumerate().skip(first).take(list_h as usize) {
-        let (value, unit, edited) = match p.kind {
-            Kind::Solver => (
+        let (value, unit, edited) = if p.kind == Kind::Solver {
+            (
                 app.sim.solver_kind.name().to_owned(),
                 "",
                 app.sim.solver_kind != app.sim.scene.solver,
-            ),
-            _ => {
-                let v = (p.get)(&app.sim.settings);
-                (p.format(v), p.unit, v != (p.get)(&scene))
-            }
+            )
+        } else {
+            let v = (p.get)(&app.sim.settings);
+            (p.format(v), p.unit, v != (p.get)(&scene))
         };
         let flag = if p.label == "ks" && unstable {
             "!"
