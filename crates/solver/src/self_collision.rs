@@ -159,47 +159,120 @@ impl SpatialHash {
     /// those before it, as in the course; the hash itself is built before any correction.
     pub fn resolve(&mut self, mesh: &ClothMesh, positions: &mut [Vec3], steps_per_frame: u32) {
         self.rebuild(mesh, positions);
-        let reach = 2.0 * mesh.thickness();
-        // NOTE: a pair is skipped without its square root when `d^2 >= reach2_out`. That is exact:
-        // `reach2_out` is at least the real reach^2 (the product's rounding, half an ulp, is far
-        // inside the 4-ulp margin), so such a pair has a real distance >= reach, and the
-        // correctly rounded sqrt cannot fall below the representable `reach` either.
-        let reach2_out = reach * reach * (1.0 + 4.0 * f64::EPSILON);
-        let steps = f64::from(steps_per_frame);
+        let repulsion = Repulsion::new(mesh, steps_per_frame);
         let pinned = mesh.pinned();
         for i in 0..positions.len() {
-            if pinned[i] {
-                continue;
-            }
-            let members = self.cell_members(i);
-            if members.len() < 2 {
-                continue;
-            }
-            let p = positions[i];
-            let mut correction = Vec3::zeros();
-            let mut count = 0u32;
-            for &j in members {
-                let j = j as usize;
-                if j == i {
-                    continue;
+            if !pinned[i] {
+                if let Some(p) = repulsion.corrected(self.cell_members(i), i, positions) {
+                    positions[i] = p;
                 }
-                let d = p - positions[j];
-                let d2 = dist2(&d);
-                if d2 >= reach2_out {
-                    continue;
-                }
-                let dist = d2.sqrt();
-                // NOTE: coincident points (dist == 0) have no direction to separate along; the
-                // course would produce NaN here, we skip the pair.
-                if dist < reach && dist > 0.0 {
-                    correction += d * ((reach - dist) / dist);
-                    count += 1;
-                }
-            }
-            if count > 0 {
-                positions[i] = p + correction / f64::from(count) / steps;
             }
         }
+    }
+
+    /// [`SpatialHash::resolve`] in an order threads can share ([`ConstraintOrder::Parallel`]):
+    /// every point's correction is computed from the positions at the start of the pass
+    /// (kept in `snapshot`), rather than from the already-corrected positions of the points
+    /// before it. The pairs, the repulsion and its averaging are the course's.
+    ///
+    /// [`ConstraintOrder::Parallel`]: crate::ConstraintOrder::Parallel
+    pub(crate) fn resolve_from_snapshot(
+        &mut self,
+        mesh: &ClothMesh,
+        positions: &mut [Vec3],
+        snapshot: &mut Vec<Vec3>,
+        steps_per_frame: u32,
+        pool: Option<&rayon::ThreadPool>,
+    ) {
+        use rayon::prelude::*;
+        // Chunks of a few thousand points amortise rayon's task cost; the result does not
+        // depend on the chunking or the thread count.
+        const CHUNK: usize = 4096;
+        self.rebuild(mesh, positions);
+        snapshot.clear();
+        snapshot.extend_from_slice(positions);
+        let repulsion = Repulsion::new(mesh, steps_per_frame);
+        let pinned = mesh.pinned();
+        let (hash, snapshot) = (&*self, &snapshot[..]);
+        let correct = |c: usize, out: &mut [Vec3]| {
+            for (k, p) in out.iter_mut().enumerate() {
+                let i = c * CHUNK + k;
+                if !pinned[i] {
+                    if let Some(q) = repulsion.corrected(hash.cell_members(i), i, snapshot) {
+                        *p = q;
+                    }
+                }
+            }
+        };
+        match pool {
+            Some(pool) => pool.install(|| {
+                positions
+                    .par_chunks_mut(CHUNK)
+                    .enumerate()
+                    .for_each(|(c, out)| correct(c, out));
+            }),
+            None => positions
+                .chunks_mut(CHUNK)
+                .enumerate()
+                .for_each(|(c, out)| correct(c, out)),
+        }
+    }
+}
+
+/// The course's repulsion between points of a box.
+#[derive(Debug, Clone, Copy)]
+struct Repulsion {
+    /// `2 * thickness`, metres.
+    reach: f64,
+    /// Squared distances at or above this are certainly out of reach (see `corrected`).
+    reach2_out: f64,
+    /// Steps per frame: the averaged correction is divided by it.
+    steps: f64,
+}
+
+impl Repulsion {
+    fn new(mesh: &ClothMesh, steps_per_frame: u32) -> Self {
+        let reach = 2.0 * mesh.thickness();
+        // NOTE: a pair is skipped without its square root when `d^2 >= reach2_out`. That is
+        // exact: `reach2_out` is at least the real reach^2 (the product's rounding, half an ulp,
+        // is far inside the 4-ulp margin), so such a pair has a real distance >= reach, and the
+        // correctly rounded sqrt cannot fall below the representable `reach` either.
+        Self {
+            reach,
+            reach2_out: reach * reach * (1.0 + 4.0 * f64::EPSILON),
+            steps: f64::from(steps_per_frame),
+        }
+    }
+
+    /// Point `i`'s corrected position given the positions of the `members` of its box, or
+    /// `None` when no other member is within reach.
+    #[inline]
+    fn corrected(&self, members: &[u32], i: usize, positions: &[Vec3]) -> Option<Vec3> {
+        if members.len() < 2 {
+            return None;
+        }
+        let p = positions[i];
+        let mut correction = Vec3::zeros();
+        let mut count = 0u32;
+        for &j in members {
+            let j = j as usize;
+            if j == i {
+                continue;
+            }
+            let d = p - positions[j];
+            let d2 = dist2(&d);
+            if d2 >= self.reach2_out {
+                continue;
+            }
+            let dist = d2.sqrt();
+            // NOTE: coincident points (dist == 0) have no direction to separate along; the
+            // course would produce NaN here, we skip the pair.
+            if dist < self.reach && dist > 0.0 {
+                correction += d * ((self.reach - dist) / dist);
+                count += 1;
+            }
+        }
+        (count > 0).then(|| p + correction / f64::from(count) / self.steps)
     }
 }
 

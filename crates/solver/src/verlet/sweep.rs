@@ -297,11 +297,10 @@ fn spring_forces(k: f64, a: [&[f64]; 3], b: [&[f64]; 3], rest: &[f64], f: [&mut 
     for i in 0..n {
         let (dx, dy, dz) = (bx[i] - ax[i], by[i] - ay[i], bz[i] - az[i]);
         let len = (dx * dx + dy * dy + dz * dz).sqrt();
-        let s = if len == 0.0 {
-            0.0
-        } else {
-            k * (len - rest[i]) / len
-        };
+        // NOTE: divide first, then select: a branch here keeps the loop scalar, a select lets
+        // it run on SIMD lanes (the NaN of 0/0 is discarded).
+        let s = k * (len - rest[i]) / len;
+        let s = if len == 0.0 { 0.0 } else { s };
         fx[i] = dx * s;
         fy[i] = dy * s;
         fz[i] = dz * s;
