@@ -10,8 +10,8 @@ use std::time::Duration;
 
 use cloth_mesh::{ClothMesh, ClothState, GridSpec, Orientation, Vec3};
 use cloth_solver::{
-    BenchRun, Collider, Plane, Solver, Sphere, StepParams, Verlet, advance_frame, pinned_grid,
-    time_frames,
+    BenchRun, Collider, ConstraintOrder, Plane, Solver, Sphere, StepParams, Verlet, advance_frame,
+    pinned_grid, time_frames,
 };
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
@@ -143,5 +143,37 @@ fn grids(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, standard, grids);
+fn threads(c: &mut Criterion) {
+    let mut g = c.benchmark_group("threads");
+    g.sample_size(10);
+    g.measurement_time(Duration::from_secs(5));
+    let params = StepParams::default();
+    let mesh = pinned_grid(256).unwrap();
+    for order in [ConstraintOrder::Faithful, ConstraintOrder::Parallel] {
+        for threads in [1, 2] {
+            let solver = Verlet::new()
+                .with_order(order)
+                .with_threads(threads)
+                .unwrap();
+            let id = BenchMarkName::id(order, threads);
+            bench_frames(&mut g, id, &mesh, &[], &params, Box::new(solver), 30);
+        }
+    }
+    g.finish();
+}
+
+/// Benchmark names of the thread group: `256/<order>/<threads>`.
+struct BenchMarkName;
+
+impl BenchMarkName {
+    fn id(order: ConstraintOrder, threads: usize) -> BenchmarkId {
+        let order = match order {
+            ConstraintOrder::Faithful => "faithful",
+            ConstraintOrder::Parallel => "parallel",
+        };
+        BenchmarkId::new(format!("256/{order}"), threads)
+    }
+}
+
+criterion_group!(benches, standard, grids, threads);
 criterion_main!(benches);

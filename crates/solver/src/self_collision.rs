@@ -53,7 +53,9 @@ pub(crate) fn dist2(d: &Vec3) -> f64 {
 #[inline]
 fn floor_to_i64(v: f64) -> i64 {
     let t = v as i64;
-    t - i64::from((t as f64) > v)
+    // NOTE: wrapping: a diverged (huge or infinite) coordinate saturates `t`, and must not
+    // overflow here; any box will do for it, the step reports the non-finite state.
+    t.wrapping_sub(i64::from((t as f64) > v))
 }
 
 impl SpatialHash {
@@ -71,7 +73,7 @@ impl SpatialHash {
         // 21 bits per axis, offset so negative boxes stay distinct; a box index beyond +-2^20
         // (a cloth a million boxes away) wraps, which only merges far-apart boxes: harmless,
         // the distance test still rejects the pairs.
-        let q = |v: f64, s: f64| (floor_to_i64(v / s) + (1 << 20)) as u64 & 0x1F_FFFF;
+        let q = |v: f64, s: f64| floor_to_i64(v / s).wrapping_add(1 << 20) as u64 & 0x1F_FFFF;
         (q(p.x, w) << 42) | (q(p.y, h) << 21) | q(p.z, t)
     }
 

@@ -1,0 +1,38 @@
+//! The command line: one clap `Parser`, one subcommand per headless job.
+
+use clap::{Parser, Subcommand};
+
+use crate::{scenes, simulate};
+
+/// A CS184 mass-spring cloth simulator in the terminal.
+#[derive(Debug, Parser)]
+#[command(name = "clothsim", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run a scene headless and write the final state (JSON, or OBJ for a `.obj` file).
+    Simulate(simulate::Args),
+    /// List the bundled scenes.
+    Scenes,
+}
+
+impl Cli {
+    /// Runs the chosen command.
+    pub fn run(self) -> anyhow::Result<()> {
+        match self.command {
+            Some(Command::Simulate(args)) => simulate::run(&args),
+            Some(Command::Scenes) => {
+                scenes::run();
+                Ok(())
+            }
+            None => {
+                anyhow::bail!("the terminal UI is not built yet; try `clothsim simulate pinned4`")
+            }
+        }
+    }
+}
