@@ -2,7 +2,7 @@
 
 use clap::{Parser, Subcommand};
 
-use crate::{scenes, simulate};
+use crate::{bench, scenes, simulate};
 
 /// A CS184 mass-spring cloth simulator in the terminal.
 #[derive(Debug, Parser)]
@@ -19,6 +19,8 @@ enum Command {
     Simulate(simulate::Args),
     /// List the bundled scenes.
     Scenes,
+    /// Time solvers: ms per frame, particle-steps per second, real-time factor.
+    Bench(bench::Args),
 }
 
 impl Cli {
@@ -26,6 +28,7 @@ impl Cli {
     pub fn run(self) -> anyhow::Result<()> {
         match self.command {
             Some(Command::Simulate(args)) => simulate::run(&args),
+            Some(Command::Bench(args)) => bench::run(&args),
             Some(Command::Scenes) => {
                 scenes::run();
                 Ok(())
