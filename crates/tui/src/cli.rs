@@ -2,7 +2,7 @@
 
 use clap::{Parser, Subcommand};
 
-use crate::{render, scenes, simulate};
+use crate::{bench, render, scenes, simulate};
 
 /// A CS184 mass-spring cloth simulator in the terminal.
 #[derive(Debug, Parser)]
@@ -21,6 +21,8 @@ enum Command {
     Render(render::Args),
     /// List the bundled scenes.
     Scenes,
+    /// Time solvers: ms per frame, particle-steps per second, real-time factor.
+    Bench(bench::Args),
 }
 
 impl Cli {
@@ -29,6 +31,7 @@ impl Cli {
         match self.command {
             Some(Command::Simulate(args)) => simulate::run(&args),
             Some(Command::Render(args)) => render::run(&args),
+            Some(Command::Bench(args)) => bench::run(&args),
             Some(Command::Scenes) => {
                 scenes::run();
                 Ok(())

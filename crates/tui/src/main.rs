@@ -4,6 +4,7 @@
 //! run headless (`simulate`, `render`, `scenes`). Every error ends as one clear message on stderr and a
 //! non-zero exit code; nothing here panics on bad input.
 
+mod bench;
 mod cli;
 mod output;
 mod render;
