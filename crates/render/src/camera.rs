@@ -333,7 +333,7 @@ impl Camera {
             // NOTE: a single point or a cloth seen exactly edge-on has no extent on one or both
             // axes; never let the scale reach 0 (it divides) or a denormal.
             let scale = scale_w.max(scale_h).max(1e-6);
-            let mid = |k: usize| (lo[k] + hi[k]) / 2.0;
+            let mid = |k: usize| f64::midpoint(lo[k], hi[k]);
             Ok(Self {
                 origin: right * mid(0) + up * mid(1) + forward * mid(2),
                 forward,

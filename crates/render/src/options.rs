@@ -102,13 +102,15 @@ pub struct RenderOptions {
     pub light: Light,
     /// Ambient intensity (default 0.08; 0 to 1).
     pub ambient: f64,
-    /// Weight of the key light's Lambert term (default 0.7; 0 to 4).
+    /// Weight of the key light's Lambert term (default 0.62; 0 to 4).
     pub diffuse: f64,
-    /// Weight of the headlight's Lambert term (default 0.35; 0 to 4).
+    /// Weight of the headlight's Lambert term (default 0.3; 0 to 4). With the defaults the
+    /// three weights sum to 1, so nothing saturates.
     pub fill: f64,
     /// Stretch each face's shades to the whole glyph ramp every frame (default true): the 2nd
     /// to 98th percentile of the visible front (or back) pixels map to the ends of the ramp,
-    /// magnified at most 4 times. Shallow folds then span several glyphs instead of one.
+    /// magnified at most 4 times (a narrower range is centred on the ramp). Shallow folds then
+    /// span several glyphs instead of one.
     pub auto_contrast: bool,
     /// Draw the cloth's back face (default true); if false, back faces are not drawn at all.
     pub two_sided: bool,
@@ -130,8 +132,8 @@ impl Default for RenderOptions {
             cell_aspect: 2.0,
             light: Light::default(),
             ambient: 0.08,
-            diffuse: 0.7,
-            fill: 0.35,
+            diffuse: 0.62,
+            fill: 0.3,
             auto_contrast: true,
             two_sided: true,
             show_pins: true,

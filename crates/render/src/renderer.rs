@@ -238,9 +238,10 @@ fn stretch(face: Material, material: &[Material], shade: &mut [f32]) {
     };
     let lo = percentile(&mut (0..BINS));
     let hi = percentile(&mut (0..BINS).rev());
+    // A narrow range (a flat, evenly lit sheet) is centred on the middle of the ramp, where
+    // small variations can show both ways, instead of pinned to an end of it.
     let range = (hi - lo).max(MIN_RANGE);
-    let mid = (lo + hi) / 2.0;
-    let lo = (mid - range / 2.0).clamp(0.0, 1.0 - range);
+    let lo = f32::midpoint(lo, hi) - range / 2.0;
     for (m, s) in material.iter().zip(shade.iter_mut()) {
         if *m == face {
             *s = ((*s - lo) / range).clamp(0.0, 1.0);

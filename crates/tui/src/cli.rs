@@ -2,7 +2,7 @@
 
 use clap::{Parser, Subcommand};
 
-use crate::{app, render, scenes, simulate};
+use crate::{app, bench, render, scenes, simulate};
 
 /// A CS184 mass-spring cloth simulator in the terminal.
 #[derive(Debug, Parser)]
@@ -23,6 +23,8 @@ enum Command {
     Render(render::Args),
     /// List the bundled scenes.
     Scenes,
+    /// Time solvers: ms per frame, particle-steps per second, real-time factor.
+    Bench(bench::Args),
 }
 
 impl Cli {
@@ -32,6 +34,7 @@ impl Cli {
             Some(Command::Tui(args)) => app::run(&args),
             Some(Command::Simulate(args)) => simulate::run(&args),
             Some(Command::Render(args)) => render::run(&args),
+            Some(Command::Bench(args)) => bench::run(&args),
             Some(Command::Scenes) => {
                 scenes::run();
                 Ok(())

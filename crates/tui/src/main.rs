@@ -5,6 +5,7 @@
 //! non-zero exit code; nothing here panics on bad input.
 
 mod app;
+mod bench;
 mod cli;
 mod output;
 mod render;

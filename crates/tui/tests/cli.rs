@@ -198,3 +198,68 @@ fn bad_input_is_one_clear_message_and_a_non_zero_exit() {
         assert!(!e.contains("panicked"), "{e}");
     }
 }
+
+#[test]
+fn render_prints_frames_of_exactly_h_lines_of_w_columns_separated_by_form_feeds() {
+    // --frames 6 --every 2 prints frames 2, 4 and 6: three frames, two separators.
+    let o = clothsim(&[
+        "render", "pinned4", "--frames", "6", "--every", "2", "--size", "30x12",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let frames: Vec<&str> = out.split("\x0c\n").collect();
+    assert_eq!(frames.len(), 3);
+    for f in frames {
+        assert_eq!(f.lines().count(), 12);
+        assert!(f.lines().all(|l| l.chars().count() == 30), "{f}");
+        assert!(!f.contains('\x1b'), "plain text has no escapes");
+        assert!(f.contains('O'), "the pins are marked");
+    }
+}
+
+#[test]
+fn render_all_views_are_labelled_side_by_side_and_ansi_has_colour() {
+    let o = clothsim(&[
+        "render", "sphere", "--frames", "2", "--view", "all", "--size", "20x8",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let lines: Vec<&str> = out.lines().collect();
+    // A label line, then 8 rows of three 20-column panels joined by " | ".
+    assert_eq!(lines.len(), 9);
+    assert!(
+        lines[0].starts_with("side") && lines[0].contains("| top") && lines[0].contains("| front")
+    );
+    assert!(
+        lines[1..]
+            .iter()
+            .all(|l| l.chars().count() == 3 * 20 + 2 * 3)
+    );
+    let o = clothsim(&[
+        "render", "pinned4", "--frames", "1", "--format", "ansi", "--color", "256", "--size",
+        "20x8",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8(o.stdout).unwrap().contains("\x1b[38;5;"));
+}
+
+#[test]
+fn render_rejects_bad_sizes_and_views_with_clear_messages() {
+    for (args, message) in [
+        (["--size", "0x40"], "zero dimension"),
+        (["--size", "4x2"], "too small"),
+        (["--size", "100000x40"], "too large"),
+        (["--size", "big"], "WIDTHxHEIGHT"),
+        (
+            ["--view", "diagonal"],
+            "expected side, top, bottom, front, orbit or all",
+        ),
+        (["--mode", "sixel"], "expected ascii, half or braille"),
+    ] {
+        let mut all = vec!["render", "pinned4", "--frames", "0"];
+        all.extend(args);
+        let o = clothsim(&all);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(stderr(&o).contains(message), "{args:?}: {}", stderr(&o));
+    }
+}
