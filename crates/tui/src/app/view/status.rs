@@ -43,14 +43,16 @@ pub fn title(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
         ),
         Span::styled(format!(" {:.0} steps/s ", s.steps_per_sec), theme.dim),
         Span::styled(format!(" {:.0} fps ", s.draws_per_sec), theme.dim),
-        Span::styled(
+    ];
+    if s.draw_ms > 0.0 {
+        spans.push(Span::styled(
             format!(
                 " draw {:.1} ms, sim budget {:.1} ms ",
                 s.draw_ms, s.budget_ms
             ),
             theme.dim,
-        ),
-    ];
+        ));
+    }
     // Drop the least important fields until it fits.
     while spans.len() > 4 && Line::from(spans.clone()).width() > area.width as usize {
         spans.pop();
