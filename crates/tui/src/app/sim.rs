@@ -12,8 +12,8 @@ use cloth_solver::{Solver, SolverKind, kinetic_energy, max_stretch_ratio};
 use super::params::Settings;
 use crate::solvers;
 
-/// Plot samples kept (one per simulated frame: about 7 s at 90 frames/s).
-pub const HISTORY: usize = 600;
+/// Plot samples kept (one per simulated frame: 20 s at 90 frames/s).
+pub const HISTORY: usize = 1800;
 
 /// Fastest point speed, m/s, beyond which the run is called exploding.
 ///
@@ -70,6 +70,9 @@ pub struct Simulation {
     step_in_frame: u32,
     /// Plot samples, oldest first.
     pub history: VecDeque<Sample>,
+    /// Largest kinetic energy since the start or the last reset, J (the energy plot's scale,
+    /// so a settled cloth reads as zero rather than as rescaled round-off).
+    pub peak_kinetic: f64,
     /// Set when the run diverged or exploded; cleared by a reset.
     pub fault: Option<Fault>,
 }
@@ -99,6 +102,7 @@ impl Simulation {
             frames: 0,
             step_in_frame: 0,
             history: VecDeque::with_capacity(HISTORY),
+            peak_kinetic: 0.0,
             fault: None,
         };
         sim.sample();
@@ -143,6 +147,7 @@ impl Simulation {
         self.frames = 0;
         self.step_in_frame = 0;
         self.history.clear();
+        self.peak_kinetic = 0.0;
         self.fault = None;
         self.sample();
     }
@@ -232,6 +237,7 @@ impl Simulation {
             self.history.pop_front();
         }
         self.history.push_back(s);
+        self.peak_kinetic = self.peak_kinetic.max(s.kinetic);
     }
 
     fn sample(&mut self) {

@@ -1,4 +1,11 @@
-//! Live plots of kinetic energy and the largest spring stretch, one sample per simulated frame.
+//! Live plots of kinetic energy and the largest spring stretch.
+//!
+//! Each column is [`BUCKET`] seconds of simulated time (the largest sample in it), so the plots
+//! scroll a few times a second instead of every frame: a settled cloth then leaves the screen,
+//! and the bytes sent, unchanged. Energy is scaled to its peak since the start or the last
+//! reset, so settling reads as bars falling to nothing.
+
+use std::collections::VecDeque;
 
 use ratatui::Frame;
 use ratatui::layout::Rect;
@@ -6,86 +13,108 @@ use ratatui::text::Line;
 use ratatui::widgets::{Block, Sparkline};
 
 use crate::app::model::App;
+use crate::app::sim::Sample;
 use crate::app::theme::Theme;
 use cloth_solver::MAX_STRETCH;
+
+/// Simulated seconds per plot column.
+pub const BUCKET: f64 = 0.25;
 
 /// Bar heights are integers; this many levels span the plot.
 const LEVELS: f64 = 1000.0;
 
+/// Energies below this fraction of the peak show as zero: round-off of a cloth at rest.
+const NEGLIGIBLE: f64 = 1e-6;
+
+/// The largest `value` in each of the last `width` buckets, oldest first.
+fn columns(h: &VecDeque<Sample>, width: usize, value: impl Fn(&Sample) -> f64) -> Vec<f64> {
+    let mut out: Vec<f64> = Vec::with_capacity(width);
+    let mut current: Option<i64> = None;
+    for s in h.iter().rev() {
+        let b = (s.time / BUCKET).floor() as i64;
+        if current == Some(b) {
+            if let Some(last) = out.last_mut() {
+                *last = last.max(value(s));
+            }
+        } else {
+            if out.len() == width {
+                break;
+            }
+            out.push(value(s));
+            current = Some(b);
+        }
+    }
+    out.reverse();
+    out
+}
+
+fn plot(
+    f: &mut Frame,
+    area: Rect,
+    title: String,
+    data: Vec<u64>,
+    theme: &Theme,
+    style: ratatui::style::Style,
+) {
+    f.render_widget(
+        Sparkline::default()
+            .block(
+                Block::bordered()
+                    .border_style(theme.border)
+                    .title(Line::styled(title, theme.text)),
+            )
+            .data(data)
+            .max(LEVELS as u64)
+            .style(style),
+        area,
+    );
+}
+
 /// The two plots, when the layout has room for them.
 pub fn plots(app: &App, f: &mut Frame, areas: [Rect; 2], theme: &Theme) {
     let [energy, stretch] = areas;
-    let h = &app.sim.history;
+    let sim = &app.sim;
+    let h = &sim.history;
     let last = h.back().copied();
     if energy.height >= 3 {
         let width = energy.width.saturating_sub(2) as usize;
-        let shown: Vec<f64> = h
-            .iter()
-            .rev()
-            .take(width)
-            .rev()
-            .map(|s| s.kinetic)
-            .collect();
-        let top = shown.iter().copied().fold(0.0, f64::max);
-        let data: Vec<u64> = shown
-            .iter()
-            .map(|&k| {
-                if top > 0.0 {
-                    (k / top * LEVELS).round() as u64
+        let peak = sim.peak_kinetic;
+        let data = columns(h, width, |s| s.kinetic)
+            .into_iter()
+            .map(|k| {
+                if peak > 0.0 {
+                    (k / peak * LEVELS).round() as u64
                 } else {
                     0
                 }
             })
             .collect();
-        let title = format!(
-            " kinetic energy {} J ",
-            sci(last.map_or(0.0, |s| s.kinetic))
-        );
-        f.render_widget(
-            Sparkline::default()
-                .block(
-                    Block::bordered()
-                        .border_style(theme.border)
-                        .title(Line::styled(title, theme.text)),
-                )
-                .data(data)
-                .max(LEVELS as u64)
-                .style(theme.plot_energy),
-            energy,
-        );
+        let now = last.map_or(0.0, |s| s.kinetic);
+        let now = if now <= peak * NEGLIGIBLE { 0.0 } else { now };
+        let title = if width >= 30 {
+            format!(" kinetic energy {} J ", sci(now))
+        } else {
+            format!(" KE {} J ", sci(now))
+        };
+        plot(f, energy, title, data, theme, theme.plot_energy);
     }
     if stretch.height >= 3 {
         let width = stretch.width.saturating_sub(2) as usize;
-        let shown: Vec<f64> = h
-            .iter()
-            .rev()
-            .take(width)
-            .rev()
-            .map(|s| s.stretch)
-            .collect();
+        let shown = columns(h, width, |s| s.stretch);
         // NOTE: the plot spans rest length (1) to the 10 % limit, or higher if exceeded, so a
         // cloth hanging at the limit reads as a full bar.
         let top = shown.iter().copied().fold(MAX_STRETCH, f64::max);
-        let data: Vec<u64> = shown
+        let data = shown
             .iter()
             .map(|&s| ((s - 1.0).max(0.0) / (top - 1.0) * LEVELS).round() as u64)
             .collect();
-        let title = format!(
-            " max stretch {:.3} (limit {MAX_STRETCH}) ",
-            last.map_or(1.0, |s| s.stretch)
-        );
-        f.render_widget(
-            Sparkline::default()
-                .block(
-                    Block::bordered()
-                        .border_style(theme.border)
-                        .title(Line::styled(title, theme.text)),
-                )
-                .data(data)
-                .max(LEVELS as u64)
-                .style(theme.plot_stretch),
-            stretch,
-        );
+        let now = last.map_or(1.0, |s| s.stretch);
+        let title = if width >= 30 {
+            format!(" max stretch {now:.3} (limit {MAX_STRETCH}) ")
+        } else {
+            format!(" stretch {now:.3} ")
+        };
+        plot(f, stretch, title, data, theme, theme.plot_stretch);
     }
 }
 
@@ -97,5 +126,24 @@ fn sci(v: f64) -> String {
         format!("{v:.3}")
     } else {
         format!("{v:.2e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn columns_hold_the_largest_sample_of_each_bucket_newest_last() {
+        let h: VecDeque<Sample> = (0..10)
+            .map(|i| Sample {
+                time: f64::from(i) * 0.1,
+                kinetic: f64::from(i),
+                stretch: 1.0,
+            })
+            .collect();
+        // Buckets of 0.25 s: [0, 0.1, 0.2], [0.3, 0.4], [0.5, 0.6, 0.7], [0.8, 0.9].
+        assert_eq!(columns(&h, 10, |s| s.kinetic), vec![2.0, 4.0, 7.0, 9.0]);
+        assert_eq!(columns(&h, 2, |s| s.kinetic), vec![7.0, 9.0]);
     }
 }
