@@ -119,6 +119,22 @@ fn the_live_ui_draws_the_cloth_edits_a_parameter_and_restores_the_shell() {
     t.keys(&["n"]);
     t.wait_for("one frame", 10, |s| s.contains("t 0.011 s"));
 
+    // Too small a terminal gets a clear message, and the layout comes back on resize.
+    assert!(
+        t.run(&["resize-window", "-t", "e2e", "-x", "50", "-y", "12"])
+            .status
+            .success()
+    );
+    t.wait_for("the too-small message", 10, |s| {
+        s.contains("terminal too small")
+    });
+    assert!(
+        t.run(&["resize-window", "-t", "e2e", "-x", "100", "-y", "30"])
+            .status
+            .success()
+    );
+    t.wait_for("the layout again", 10, |s| s.contains("parameters"));
+
     // Quit: the shell comes back, out of the alternate screen, with its terminal modes.
     t.keys(&["q"]);
     let s = t.wait_for("the shell", 10, |s| s.contains("exit=0"));
@@ -129,6 +145,15 @@ fn the_live_ui_draws_the_cloth_edits_a_parameter_and_restores_the_shell() {
         s.lines().any(|l| l.trim() == "icanon"),
         "the terminal is back in canonical (cooked) mode:\n{s}"
     );
+
+    // With no arguments: pinned4, running; Esc with nothing open quits.
+    t.keys(&["clear", "Enter"]);
+    t.keys(&[&format!("{bin}; echo \"bare=$?\""), "Enter"]);
+    t.wait_for("the default scene running", 30, |s| {
+        s.contains("pinned4") && s.contains("RUNNING")
+    });
+    t.keys(&["Escape"]);
+    t.wait_for("the shell again", 10, |s| s.contains("bare=0"));
 }
 
 #[test]

@@ -360,3 +360,30 @@ fn snapshot_too_small_then_recovers() {
     let big = screen(&mut app, 80, 24);
     assert!(big.contains("parameters"));
 }
+
+#[test]
+fn dragging_in_an_orbit_pane_turns_the_camera_and_the_wheel_zooms() {
+    let mut app = app_with("pinned4", true);
+    update(
+        &mut app,
+        Message::Resize {
+            width: 120,
+            height: 40,
+        },
+    );
+    app.views[1] = cloth_render::View::Orbit;
+    let (yaw, distance) = (app.orbit.yaw, app.orbit.distance);
+    // Pane 2 is the right half of the view area (left of the 40-column panel).
+    let (col, row) = (60, 10);
+    update(&mut app, Message::MouseDown { col, row });
+    update(&mut app, Message::MouseDrag { col: col + 10, row });
+    update(&mut app, Message::MouseUp);
+    // 10 cells at 0.05 rad per cell.
+    assert!((app.orbit.yaw - (yaw + 0.5)).abs() < 1e-12);
+    update(&mut app, Message::Wheel { col, row, dir: -1 });
+    assert!((app.orbit.distance - distance * super::keymap::ZOOM).abs() < 1e-12);
+    // The same gesture over a fixed view (pane 1) does nothing to the camera.
+    update(&mut app, Message::MouseDown { col: 5, row });
+    update(&mut app, Message::MouseDrag { col: 15, row });
+    assert!((app.orbit.yaw - (yaw + 0.5)).abs() < 1e-12);
+}
