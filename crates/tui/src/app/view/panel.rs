@@ -80,9 +80,18 @@ pub fn params(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
             height: help_h - 1,
             ..inside
         };
+        let text = PARAMS[app.selected].help;
+        let w = usize::from(help.width);
+        // One line only: cut it visibly rather than mid-phrase.
+        let text = if help.height == 1 && text.chars().count() > w {
+            let mut t: String = text.chars().take(w.saturating_sub(1)).collect();
+            t.push('…');
+            t
+        } else {
+            text.to_owned()
+        };
         f.render_widget(
-            Paragraph::new(Span::styled(PARAMS[app.selected].help, theme.dim))
-                .wrap(Wrap { trim: true }),
+            Paragraph::new(Span::styled(text, theme.dim)).wrap(Wrap { trim: true }),
             help,
         );
     }
