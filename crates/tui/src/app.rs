@@ -1,7 +1,7 @@
 //! `clothsim tui`: the live terminal UI (the default command).
 //!
 //! Elm architecture, synchronous: a model ([`App`]), messages ([`Message`]), one
-//! [`update`] function that changes the model, and a pure [`view`]. Terminal events become
+//! [`update()`] function that changes the model, and a pure [`view()`]. Terminal events become
 //! messages in [`input`]; the one [`keymap::KEYMAP`] dispatches keys and generates the footer
 //! and the help; the one [`params::PARAMS`] table drives the parameter panel. The loop in
 //! [`runner`] owns the only clock: it feeds wall time to a fixed-step accumulator with a

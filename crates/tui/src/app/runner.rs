@@ -2,7 +2,7 @@
 //!
 //! Each turn: wait for input until the next frame is due, turn events into messages, give the
 //! simulation the wall time that passed (it owes `wall * rate` simulated seconds, paid in fixed
-//! steps of `dt`), run owed steps for at most [`BUDGET`] of a frame interval and forgive the
+//! steps of `dt`), run owed steps for at most the budget of a frame interval and forgive the
 //! rest (the status line then shows a real-time factor below 1), and draw if anything changed
 //! and a frame is due. So however slow the simulation, input and drawing keep their pace.
 //!
