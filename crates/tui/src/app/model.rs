@@ -111,14 +111,31 @@ pub enum Overlay {
     None,
     /// The key help.
     Help,
-    /// The scene picker; the index is the selected entry (the last entry opens a file).
-    Picker(usize),
+    /// The scene picker.
+    Picker(Picker),
     /// A text prompt.
     Prompt(Prompt),
     /// "Overwrite this file?"
     ConfirmOverwrite(PathBuf),
     /// The simulation stopped itself; the message says why and how to recover.
     Fault,
+}
+
+/// The scene picker: bundled scenes, then the scene files in the working folder, then
+/// "type a path".
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Picker {
+    /// The selected entry.
+    pub selected: usize,
+    /// `*.json` files in the working folder, sorted by name.
+    pub files: Vec<String>,
+}
+
+impl Picker {
+    /// How many entries it lists.
+    pub fn len(&self) -> usize {
+        cloth_scene::BUNDLED.len() + self.files.len() + 1
+    }
 }
 
 /// Measurements of the app loop over the last second or so.

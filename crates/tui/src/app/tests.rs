@@ -387,3 +387,35 @@ fn dragging_in_an_orbit_pane_turns_the_camera_and_the_wheel_zooms() {
     update(&mut app, Message::MouseDrag { col: 15, row });
     assert!((app.orbit.yaw - (yaw + 0.5)).abs() < 1e-12);
 }
+
+#[test]
+fn the_picker_lists_and_opens_scene_files_of_the_working_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("mine.json"),
+        cloth_scene::bundled("sphere").unwrap().json,
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("notes.txt"), "not a scene").unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    press(&mut app, KeyCode::Char('o'));
+    match &app.overlay {
+        Overlay::Picker(p) => assert_eq!(p.files, vec!["mine.json".to_owned()]),
+        other => panic!("expected the picker, got {other:?}"),
+    }
+    for _ in 0..cloth_scene::BUNDLED.len() {
+        press(&mut app, KeyCode::Down);
+    }
+    press(&mut app, KeyCode::Enter);
+    assert!(
+        app.sim.scene.origin.ends_with("mine.json"),
+        "{}",
+        app.sim.scene.origin
+    );
+    assert_eq!(
+        app.sim.settings.colliders.len(),
+        1,
+        "the sphere came with it"
+    );
+}

@@ -8,7 +8,7 @@ use ratatui::layout::{Position, Rect};
 
 use super::layout;
 use super::message::Message;
-use super::model::{App, Layout, Level, Overlay, Prompt, Purpose, RATES};
+use super::model::{App, Layout, Level, Overlay, Picker, Prompt, Purpose, RATES};
 use super::params::{Kind, PARAMS};
 use super::sim::Simulation;
 use crate::output;
@@ -115,7 +115,12 @@ pub fn update(app: &mut App, msg: Message) {
             app.orbit = Orbit::course_default(&app.sim.scene.mesh);
             app.say(Level::Info, "orbit camera reset");
         }
-        Message::OpenPicker => app.overlay = Overlay::Picker(0),
+        Message::OpenPicker => {
+            app.overlay = Overlay::Picker(Picker {
+                selected: 0,
+                files: json_files(&app.cwd),
+            });
+        }
         Message::Save => {
             let stem = std::path::Path::new(&app.sim.scene.origin)
                 .file_stem()
@@ -149,9 +154,9 @@ pub fn update(app: &mut App, msg: Message) {
             Overlay::Help => {
                 app.help_scroll = (i64::from(app.help_scroll) + i64::from(d)).clamp(0, 200) as u16;
             }
-            Overlay::Picker(i) => {
-                let n = cloth_scene::BUNDLED.len() + 1;
-                *i = (*i as i64 + i64::from(d)).rem_euclid(n as i64) as usize;
+            Overlay::Picker(p) => {
+                let n = p.len() as i64;
+                p.selected = (p.selected as i64 + i64::from(d)).rem_euclid(n) as usize;
             }
             Overlay::Prompt(p) => {
                 let len = p.text.chars().count();
@@ -452,18 +457,43 @@ fn prompt_edit(app: &mut App, f: impl FnOnce(&mut Prompt)) {
     }
 }
 
+/// The `*.json` files directly in `dir`, sorted; none if it cannot be read.
+fn json_files(dir: &std::path::Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.filter_map(Result::ok)
+                .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+                .filter_map(|e| e.file_name().into_string().ok())
+                .filter(|n| {
+                    std::path::Path::new(n)
+                        .extension()
+                        .is_some_and(|x| x.eq_ignore_ascii_case("json"))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
 fn byte_index(s: &str, chars: usize) -> usize {
     s.char_indices().nth(chars).map_or(s.len(), |(i, _)| i)
 }
 
 fn submit(app: &mut App) {
     match std::mem::take(&mut app.overlay) {
-        Overlay::Picker(i) => match cloth_scene::BUNDLED.get(i) {
-            Some(b) => open_scene(app, b.name),
-            None => {
+        Overlay::Picker(p) => {
+            let bundled = cloth_scene::BUNDLED.len();
+            if let Some(b) = cloth_scene::BUNDLED.get(p.selected) {
+                open_scene(app, b.name);
+            } else if let Some(name) = p.files.get(p.selected - bundled) {
+                if let Err(e) = submit_open(app, name) {
+                    app.say(Level::Error, e);
+                }
+            } else {
                 app.overlay = Overlay::Prompt(Prompt::new(Purpose::OpenPath, String::new()));
             }
-        },
+        }
         Overlay::Prompt(mut p) => {
             let result = match p.purpose {
                 Purpose::Value(row) => submit_value(app, row, &p.text),

@@ -40,7 +40,7 @@ pub fn view(app: &App, f: &mut Frame) {
     match &app.overlay {
         Overlay::None => {}
         Overlay::Help => overlay::help(app, f, body, &theme),
-        Overlay::Picker(i) => overlay::picker(f, body, *i, &theme),
+        Overlay::Picker(p) => overlay::picker(f, body, p, &theme),
         Overlay::Prompt(p) => overlay::prompt(app, f, body, p, &theme),
         Overlay::ConfirmOverwrite(path) => overlay::confirm(f, body, path, &theme),
         Overlay::Fault => overlay::fault(app, f, body, &theme),

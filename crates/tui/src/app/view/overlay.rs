@@ -9,7 +9,7 @@ use ratatui::widgets::{Block, Clear, Paragraph, Wrap};
 
 use crate::app::keymap::{Group, KEYMAP, keys_label};
 use crate::app::layout::{MIN_HEIGHT, MIN_WIDTH};
-use crate::app::model::{App, Prompt, Purpose};
+use crate::app::model::{App, Picker, Prompt, Purpose};
 use crate::app::params::{Kind, PARAMS, fmt_number};
 use crate::app::theme::Theme;
 
@@ -116,28 +116,43 @@ pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     }
 }
 
-/// The scene picker: every bundled scene, then "open a file".
-pub fn picker(f: &mut Frame, area: Rect, selected: usize, theme: &Theme) {
+/// The scene picker: bundled scenes, the working folder's scene files, "type a path".
+pub fn picker(f: &mut Frame, area: Rect, p: &Picker, theme: &Theme) {
     let scenes = cloth_scene::BUNDLED;
-    let name_w = scenes.iter().map(|s| s.name.len()).max().unwrap_or(8);
+    let name_w = scenes
+        .iter()
+        .map(|s| s.name.len())
+        .chain(p.files.iter().map(|n| n.chars().count().min(30)))
+        .max()
+        .unwrap_or(8);
+    let style = |i: usize, normal| {
+        if i == p.selected {
+            theme.selected
+        } else {
+            normal
+        }
+    };
     let mut lines: Vec<Line> = scenes
         .iter()
         .enumerate()
         .map(|(i, s)| {
-            let style = if i == selected {
-                theme.selected
-            } else {
-                theme.text
-            };
-            Line::styled(format!(" {:<name_w$}  {}", s.name, s.description), style)
+            Line::styled(
+                format!(" {:<name_w$}  {}", s.name, s.description),
+                style(i, theme.text),
+            )
         })
         .collect();
-    let style = if selected == scenes.len() {
-        theme.selected
-    } else {
-        theme.key
-    };
-    lines.push(Line::styled(" open a scene file...", style));
+    for (k, name) in p.files.iter().enumerate() {
+        let i = scenes.len() + k;
+        lines.push(Line::styled(
+            format!(" {name:<name_w$}  scene file in this folder"),
+            style(i, theme.text),
+        ));
+    }
+    lines.push(Line::styled(
+        " type a path...",
+        style(p.len() - 1, theme.key),
+    ));
     let w = lines.iter().map(Line::width).max().unwrap_or(40) as u16 + 3;
     let inside = boxed(
         f,
@@ -147,7 +162,9 @@ pub fn picker(f: &mut Frame, area: Rect, selected: usize, theme: &Theme) {
         "open a scene (↑↓ choose, Enter opens, Esc cancels)",
         theme.focus,
     );
-    let first = selected.saturating_sub(inside.height.saturating_sub(1) as usize);
+    let first = p
+        .selected
+        .saturating_sub(inside.height.saturating_sub(1) as usize);
     f.render_widget(Paragraph::new(lines).scroll((first as u16, 0)), inside);
 }
 
