@@ -26,37 +26,59 @@ pub fn title(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
         format!("1/{}x", (1.0 / rate).round())
     };
     let s = &app.stats;
-    let mut spans = vec![
-        Span::styled(" clothsim ", theme.key),
-        Span::styled(format!(" {} ", sim.scene.origin), theme.text),
-        Span::styled(format!(" {} ", sim.solver_kind), theme.dim),
-        Span::styled(format!(" {state}"), style),
-        Span::styled(format!(" {rate} "), theme.text),
-        Span::styled(format!(" t {:.3} s ", sim.time), theme.text),
-        Span::styled(
-            format!(
-                " rtf {:.2}{} ",
-                s.realtime_factor,
-                if s.lagging { " (lagging)" } else { "" }
-            ),
-            if s.lagging { theme.warn } else { theme.text },
+    // (priority, span): when the line is too wide, the lowest priorities go first.
+    let mut fields = vec![
+        (2, Span::styled(" clothsim ", theme.key)),
+        (
+            8,
+            Span::styled(format!(" {} ", sim.scene.origin), theme.text),
         ),
-        Span::styled(format!(" {:.0} steps/s ", s.steps_per_sec), theme.dim),
-        Span::styled(format!(" {:.0} fps ", s.draws_per_sec), theme.dim),
+        (4, Span::styled(format!(" {} ", sim.solver_kind), theme.dim)),
+        (10, Span::styled(format!(" {state}"), style)),
+        (10, Span::styled(format!(" {rate} "), theme.text)),
+        (
+            9,
+            Span::styled(format!(" t {:.3} s ", sim.time), theme.text),
+        ),
+        (
+            7,
+            Span::styled(
+                format!(
+                    " rtf {:.2}{} ",
+                    s.realtime_factor,
+                    if s.lagging { " lagging" } else { "" }
+                ),
+                if s.lagging { theme.warn } else { theme.text },
+            ),
+        ),
+        (
+            5,
+            Span::styled(format!(" {:.0} steps/s ", s.steps_per_sec), theme.dim),
+        ),
+        (
+            6,
+            Span::styled(format!(" {:.0} fps ", s.draws_per_sec), theme.dim),
+        ),
     ];
     if s.draw_ms > 0.0 {
-        spans.push(Span::styled(
-            format!(
-                " draw {:.1} ms, sim budget {:.1} ms ",
-                s.draw_ms, s.budget_ms
+        fields.push((
+            1,
+            Span::styled(
+                format!(
+                    " draw {:.1} ms, sim budget {:.1} ms ",
+                    s.draw_ms, s.budget_ms
+                ),
+                theme.dim,
             ),
-            theme.dim,
         ));
     }
-    // Drop the least important fields until it fits.
-    while spans.len() > 4 && Line::from(spans.clone()).width() > area.width as usize {
-        spans.pop();
+    let width = |f: &[(i32, Span)]| f.iter().map(|(_, s)| s.width()).sum::<usize>();
+    while fields.len() > 2 && width(&fields) > area.width as usize {
+        if let Some(k) = (0..fields.len()).min_by_key(|&k| fields[k].0) {
+            fields.remove(k);
+        }
     }
+    let spans: Vec<Span> = fields.into_iter().map(|(_, s)| s).collect();
     f.render_widget(Paragraph::new(Line::from(spans)), area);
 }
 
