@@ -2,8 +2,9 @@
 //!
 //! Each column is [`BUCKET`] seconds of simulated time (the largest sample in it), so the plots
 //! scroll a few times a second instead of every frame: a settled cloth then leaves the screen,
-//! and the bytes sent, unchanged. Energy is scaled to its peak since the start or the last
-//! reset, so settling reads as bars falling to nothing.
+//! and the bytes sent, unchanged. Energy is drawn on a log scale spanning [`DECADES`] below its
+//! peak since the start or the last reset: a settling cloth loses energy exponentially, which
+//! reads as a steady ramp down (a linear scale would show the first swing and then nothing).
 
 use std::collections::VecDeque;
 
@@ -23,8 +24,17 @@ pub const BUCKET: f64 = 0.25;
 /// Bar heights are integers; this many levels span the plot.
 const LEVELS: f64 = 1000.0;
 
-/// Energies below this fraction of the peak show as zero: round-off of a cloth at rest.
-const NEGLIGIBLE: f64 = 1e-6;
+/// Decades of kinetic energy below the peak that the energy plot spans; less shows as nothing.
+pub const DECADES: f64 = 8.0;
+
+/// Bar height of energy `k` on the log scale below `peak`.
+fn log_level(k: f64, peak: f64) -> u64 {
+    if !(peak > 0.0 && k > 0.0) {
+        return 0;
+    }
+    let t = ((k / peak).log10() + DECADES) / DECADES;
+    (t.clamp(0.0, 1.0) * LEVELS).round() as u64
+}
 
 /// The largest `value` in each of the last `width` buckets, oldest first.
 fn columns(h: &VecDeque<Sample>, width: usize, value: impl Fn(&Sample) -> f64) -> Vec<f64> {
@@ -81,20 +91,13 @@ pub fn plots(app: &App, f: &mut Frame, areas: [Rect; 2], theme: &Theme) {
         let peak = sim.peak_kinetic;
         let data = columns(h, width, |s| s.kinetic)
             .into_iter()
-            .map(|k| {
-                if peak > 0.0 {
-                    (k / peak * LEVELS).round() as u64
-                } else {
-                    0
-                }
-            })
+            .map(|k| log_level(k, peak))
             .collect();
         let now = last.map_or(0.0, |s| s.kinetic);
-        let now = if now <= peak * NEGLIGIBLE { 0.0 } else { now };
         let title = if width >= 30 {
-            format!(" kinetic energy {} J ", sci(now))
+            format!(" kinetic energy {} J (log) ", sci(now))
         } else {
-            format!(" KE {} J ", sci(now))
+            format!(" KE {} J (log) ", sci(now))
         };
         plot(f, energy, title, data, theme, theme.plot_energy);
     }
@@ -145,5 +148,15 @@ mod tests {
         // Buckets of 0.25 s: [0, 0.1, 0.2], [0.3, 0.4], [0.5, 0.6, 0.7], [0.8, 0.9].
         assert_eq!(columns(&h, 10, |s| s.kinetic), vec![2.0, 4.0, 7.0, 9.0]);
         assert_eq!(columns(&h, 2, |s| s.kinetic), vec![7.0, 9.0]);
+    }
+
+    #[test]
+    fn energy_levels_are_logarithmic_below_the_peak() {
+        assert_eq!(log_level(5.0, 5.0), 1000);
+        // Half the decades down is half the height.
+        assert_eq!(log_level(5.0e-4, 5.0), 500);
+        assert_eq!(log_level(5.0e-9, 5.0), 0);
+        assert_eq!(log_level(0.0, 5.0), 0);
+        assert_eq!(log_level(1.0, 0.0), 0);
     }
 }
