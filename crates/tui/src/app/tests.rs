@@ -419,3 +419,32 @@ fn the_picker_lists_and_opens_scene_files_of_the_working_folder() {
         "the sphere came with it"
     );
 }
+
+#[test]
+fn without_colour_nothing_on_screen_is_coloured() {
+    use ratatui::style::Color;
+    let draw = |app: &mut App| {
+        update(
+            app,
+            Message::Resize {
+                width: 100,
+                height: 30,
+            },
+        );
+        panes::prepare(app, Rect::new(0, 0, 100, 30));
+        let mut t = Terminal::new(TestBackend::new(100, 30)).unwrap();
+        t.draw(|f| view(app, f)).unwrap();
+        t.backend()
+            .buffer()
+            .content()
+            .iter()
+            .any(|c| c.fg != Color::Reset || c.bg != Color::Reset)
+    };
+    // Off a terminal (or under NO_COLOR, or --color never) colour resolves to none.
+    let mut app = app_with("pinned4", true);
+    assert!(!app.color && !app.color_allowed);
+    assert!(!draw(&mut app), "no cell may carry a colour");
+    // The same screen with colour allowed does use it (so the check above can fail).
+    app.color_allowed = true;
+    assert!(draw(&mut app));
+}
