@@ -288,6 +288,11 @@ impl Solver for FastImplicit {
             state.last[p] = state.positions[p];
             state.positions[p] = self.x[p];
         }
+        // NOTE: a diverged solve is reported before self-collision, whose spatial hash cannot
+        // index non-finite positions.
+        if let Some(i) = state.first_non_finite() {
+            return Err(SolveError::non_finite(mesh, i));
+        }
         if params.self_collision {
             self.hash
                 .resolve(mesh, &mut state.positions, params.steps_per_frame);

@@ -57,9 +57,11 @@ use crate::cholesky::Cholesky;
 use crate::spring_energy::{SpringLaw, limiter_stiffness};
 use crate::topology::{NONE, Topology};
 
-/// Newton stops once its step moves no point farther than this, metres (1 nm: a thousandth of
-/// the 1 um the equilibrium tests compare, a million times the rounding of unit-scale positions).
-pub const NEWTON_TOLERANCE: f64 = 1e-9;
+/// By default Newton stops once its step moves no point farther than this, metres (1 um: a
+/// twentieth of the 0.1 % stretch of a 2 cm spring, far below a terminal cell, and a velocity
+/// error under 1e-4 m/s at one step per frame). Each iteration costs a numeric factorisation, so
+/// a tighter default would mostly buy invisible digits; see [`ImplicitEuler::with_tolerance`].
+pub const NEWTON_TOLERANCE: f64 = 1e-6;
 
 /// At most this many Newton iterations per step; a step that has not converged by then keeps its
 /// last (energy-decreasing) iterate and reports its residual.
@@ -75,8 +77,9 @@ const MAX_HALVINGS: u32 = 40;
 /// potential, on faer's sparse Cholesky. See the module documentation for the method.
 ///
 /// Owns only caches (the topology and the symbolic factor) and scratch memory.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct ImplicitEuler {
+    tolerance: f64,
     system: Option<System>,
     /// The gradient of `Phi` (3 per free point).
     grad: Vec<f64>,
@@ -111,10 +114,33 @@ struct Problem<'a> {
 }
 
 impl ImplicitEuler {
-    /// A new solver; its caches are built on the first step.
+    /// A new solver with the default [`NEWTON_TOLERANCE`]; its caches are built on the first
+    /// step.
     #[must_use]
     pub fn new() -> Self {
-        Self::default()
+        Self::with_tolerance(NEWTON_TOLERANCE)
+    }
+
+    /// A new solver whose Newton iterations stop once a step moves no point farther than
+    /// `tolerance` metres (non-finite or negative values mean the default).
+    #[must_use]
+    pub fn with_tolerance(tolerance: f64) -> Self {
+        let tolerance = if tolerance.is_finite() && tolerance >= 0.0 {
+            tolerance
+        } else {
+            NEWTON_TOLERANCE
+        };
+        Self {
+            tolerance,
+            system: None,
+            grad: Vec::new(),
+            values: Vec::new(),
+            rhs: Vec::new(),
+            y: Vec::new(),
+            x: Vec::new(),
+            trial: Vec::new(),
+            hash: SpatialHash::default(),
+        }
     }
 
     /// Makes sure the topology and symbolic factor describe `mesh`.
@@ -139,6 +165,12 @@ fn method_error(reason: String) -> SolveError {
     SolveError::Method {
         solver: "implicit",
         reason,
+    }
+}
+
+impl Default for ImplicitEuler {
+    fn default() -> Self {
+        Self::new()
     }
 }
 
@@ -354,7 +386,7 @@ impl Solver for ImplicitEuler {
             if !residual.is_finite() {
                 break;
             }
-            if residual <= NEWTON_TOLERANCE {
+            if residual <= self.tolerance {
                 apply_step(&topo.free_points, &mut self.x, dx, 1.0);
                 break;
             }
@@ -378,7 +410,7 @@ impl Solver for ImplicitEuler {
                 break;
             }
             std::mem::swap(&mut self.x, &mut self.trial);
-            if alpha * residual <= NEWTON_TOLERANCE {
+            if alpha * residual <= self.tolerance {
                 break;
             }
         }
@@ -388,6 +420,11 @@ impl Solver for ImplicitEuler {
             let p = p as usize;
             state.last[p] = state.positions[p];
             state.positions[p] = self.x[p];
+        }
+        // NOTE: a diverged solve is reported before self-collision, whose spatial hash cannot
+        // index non-finite positions.
+        if let Some(i) = state.first_non_finite() {
+            return Err(SolveError::non_finite(mesh, i));
         }
         if params.self_collision {
             self.hash
@@ -400,6 +437,163 @@ impl Solver for ImplicitEuler {
                 iterations,
                 residual,
             }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cloth_mesh::{GridSpec, SplitMix64};
+
+    /// A 5 x 4 cloth pinned at both ends of row 0, its points moved to `scale` times their
+    /// start positions (x by `sx`, z by `sz`) plus a deterministic jitter of up to `jitter` m
+    /// on every axis.
+    fn deformed(sx: f64, sz: f64, jitter: f64) -> (ClothMesh, Vec<Vec3>) {
+        let mesh = ClothMesh::new(&GridSpec {
+            num_width_points: 5,
+            num_height_points: 4,
+            pinned: vec![(0, 0), (4, 0)],
+            ..GridSpec::default()
+        })
+        .unwrap();
+        let mut rng = SplitMix64::new(5);
+        let x = mesh
+            .start_positions()
+            .iter()
+            .map(|p| {
+                let mut j = || rng.uniform(-jitter, jitter);
+                Vec3::new(p.x * sx + j(), p.y + j(), p.z * sz + j())
+            })
+            .collect();
+        (mesh, x)
+    }
+
+    fn problem<'a>(mesh: &'a ClothMesh, topo: &'a Topology, params: &StepParams) -> Problem<'a> {
+        let h = params.dt();
+        let mass = mesh.point_mass(params.density);
+        let k_lim = limiter_stiffness(mesh, params);
+        Problem {
+            mesh,
+            topo,
+            laws: mesh
+                .springs()
+                .iter()
+                .map(|s| SpringLaw {
+                    k: params.stiffness(s.kind),
+                    rest: s.rest,
+                    k_lim,
+                })
+                .collect(),
+            inertia: mass * (1.0 + params.drag_rate() * h) / (h * h),
+            weight: params.gravity * mass,
+        }
+    }
+
+    #[test]
+    fn the_assembled_hessian_is_the_derivative_of_the_gradient() {
+        // Stretched 15 % along x (limiter active on those springs), 5 % along z (in tension,
+        // limiter off), diagonals at ~8.7 %: every spring is in tension, so the clamp is
+        // inactive and the assembled matrix must be the exact Hessian.
+        let (mesh, x) = deformed(1.15, 1.05, 5e-4);
+        let params = StepParams::default();
+        let topo = Topology::new(&mesh);
+        let p = problem(&mesh, &topo, &params);
+        for (s, law) in mesh.springs().iter().zip(&p.laws) {
+            let len = (x[s.b as usize] - x[s.a as usize]).norm();
+            assert!(len > s.rest, "{s:?} is compressed");
+            // Central differences must not straddle the kink at 1.1 rest.
+            assert!((len - 1.1 * law.rest).abs() > 1e-4, "{s:?} is at the kink");
+        }
+        let (col_ptr, _) = topo.block_pattern();
+        let n = 3 * topo.free();
+        let y = mesh.start_positions().to_vec();
+        let mut values = vec![0.0; *col_ptr.last().unwrap()];
+        let mut grad = vec![0.0; n];
+        p.assemble(&x, &y, &col_ptr, &mut grad, Some(&mut values));
+        let mut dense = vec![vec![0.0; n]; n];
+        let (cp, ri) = topo.block_pattern();
+        for j in 0..n {
+            for e in cp[j]..cp[j + 1] {
+                dense[ri[e]][j] = values[e];
+                dense[j][ri[e]] = values[e];
+            }
+        }
+        let scale = dense.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
+        // Step 1e-7 m. The gradient is a piecewise-smooth function of the positions; its
+        // third derivatives are ~k_lim / L^2 ~ 1e9, so truncation is ~1e-14 * 1e9 = 1e-5 N/m;
+        // rounding of gradients of ~1e6 N is ~2e-10 / 2e-7 = 1e-3 N/m. Against a largest
+        // entry of ~1e8 N/m, a relative 1e-9 (~0.1 N/m) passes only a correct Hessian: the
+        // smallest true terms (mass 515 N/m, bending tension terms ~50 N/m) are far above it.
+        let step = 1e-7;
+        let mut plus = vec![0.0; n];
+        let mut minus = vec![0.0; n];
+        for j in 0..n {
+            let point = topo.free_points[j / 3] as usize;
+            let mut xp = x.clone();
+            xp[point][j % 3] += step;
+            p.assemble(&xp, &y, &col_ptr, &mut plus, None);
+            let mut xm = x.clone();
+            xm[point][j % 3] -= step;
+            p.assemble(&xm, &y, &col_ptr, &mut minus, None);
+            for i in 0..n {
+                let fd = (plus[i] - minus[i]) / (2.0 * step);
+                let err = (fd - dense[i][j]).abs();
+                assert!(
+                    err <= 1e-9 * scale,
+                    "H[{i}][{j}] = {} but finite differences give {fd}",
+                    dense[i][j]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn cholesky_succeeds_on_a_compressed_cloth_at_a_huge_step() {
+        // Every spring compressed to ~70 %: the exact Hessian's transverse terms are
+        // k (1 - L/l) ~ -0.43 k, and at h = 100 s the mass term (6e-6 N/m) cannot make up for
+        // them: moving one point out of the cloth's plane is transverse to all its springs, so
+        // the exact Hessian is indefinite and only the clamp keeps the matrix definite.
+        let (mesh, x) = deformed(0.7, 0.7, 1e-3);
+        let params = StepParams {
+            steps_per_frame: 1,
+            frames_per_sec: 0.01,
+            ..StepParams::default()
+        };
+        let topo = Topology::new(&mesh);
+        let p = problem(&mesh, &topo, &params);
+        let (col_ptr, row_idx) = topo.block_pattern();
+        let mut values = vec![0.0; row_idx.len()];
+        let mut grad = vec![0.0; 3 * topo.free()];
+        p.assemble(&x, &x, &col_ptr, &mut grad, Some(&mut values));
+        let mut chol = Cholesky::new(col_ptr, row_idx, 1).unwrap();
+        chol.factorize(&values).unwrap();
+        // And the solution is a descent direction: grad . H^-1 grad > 0.
+        let mut dx = grad.clone();
+        chol.solve_in_place(&mut dx).unwrap();
+        let slope: f64 = grad.iter().zip(&dx).map(|(g, d)| g * d).sum();
+        assert!(slope > 0.0);
+    }
+
+    #[test]
+    fn pinned_points_never_move_and_velocity_is_committed_to_last() {
+        let (mesh, _) = deformed(1.0, 1.0, 0.0);
+        let mut state = ClothState::new(&mesh);
+        let params = StepParams {
+            steps_per_frame: 1,
+            ..StepParams::default()
+        };
+        let mut solver = ImplicitEuler::new();
+        solver.step(&mesh, &[], &params, &mut state).unwrap();
+        let before = state.positions.clone();
+        solver.step(&mesh, &[], &params, &mut state).unwrap();
+        for (i, &pin) in mesh.pinned().iter().enumerate() {
+            if pin {
+                assert_eq!(state.positions[i], mesh.start_positions()[i]);
+            } else {
+                // last holds the start-of-step positions: (x - last) / h is the new velocity.
+                assert_eq!(state.last[i], before[i]);
+            }
         }
     }
 }
