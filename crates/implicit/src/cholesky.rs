@@ -1,12 +1,13 @@
 //! A faer sparse Cholesky (`L L^T`) whose symbolic analysis is done once per sparsity pattern.
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Conj, MatMut, Par, Side, Spec};
 
 /// A symmetric positive-definite matrix with a fixed lower-triangular pattern and its Cholesky
 /// factor.
@@ -60,8 +61,7 @@ impl Cholesky {
             )
             .map_err(|e| format!("symbolic Cholesky analysis failed: {e:?}"))?
         };
-        let factor_req =
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
+        let factor_req = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Spec::default());
         let solve_req = symbolic.solve_in_place_scratch::<f64>(rhs_cols, Par::Seq);
         let scratch = MemBuffer::try_new(StackReq::any_of(&[factor_req, solve_req]))
             .map_err(|_| "out of memory for the Cholesky workspace".to_owned())?;
@@ -103,10 +103,10 @@ impl Cholesky {
                 &mut self.l_values,
                 a,
                 Side::Lower,
-                Default::default(),
+                LltRegularization::default(),
                 Par::Seq,
                 MemStack::new(&mut self.scratch),
-                Default::default(),
+                Spec::default(),
             )
             .map_err(|e| format!("the matrix is not positive definite ({e})"))?;
         self.factored = true;

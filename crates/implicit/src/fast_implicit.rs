@@ -48,10 +48,10 @@
 use cloth_mesh::{ClothMesh, ClothState, Vec3};
 use cloth_solver::{
     Collider, MAX_STRETCH, SolveError, Solver, SpatialHash, StepParams, StepReport,
-    apply_colliders,
 };
 
 use crate::cholesky::Cholesky;
+use crate::commit::{commit, inertial_prediction};
 use crate::topology::{NONE, Topology};
 
 /// The fast local/global implicit solver. Owns caches (topology, factored matrix, multiplier
@@ -142,10 +142,7 @@ impl FastImplicit {
             if k == 0.0 {
                 continue;
             }
-            let (fa, fb) = (
-                topo.free_index[s.a as usize],
-                topo.free_index[s.b as usize],
-            );
+            let (fa, fb) = (topo.free_index[s.a as usize], topo.free_index[s.b as usize]);
             for f in [fa, fb] {
                 if f != NONE {
                     v[sys.col_ptr[f as usize]] += k;
@@ -200,15 +197,7 @@ impl Solver for FastImplicit {
             self.lambda.fill(0.0);
         }
 
-        self.y.clear();
-        self.y.extend(
-            state
-                .positions
-                .iter()
-                .zip(&state.last)
-                .zip(mesh.pinned())
-                .map(|((&p, &l), &pin)| if pin { p } else { p + (p - l) / (1.0 + c * h) }),
-        );
+        inertial_prediction(mesh, state, c * h, &mut self.y);
         self.x.clone_from(&self.y);
         self.rhs.resize(3 * n, 0.0);
         let starts = mesh.start_positions();
@@ -283,28 +272,19 @@ impl Solver for FastImplicit {
             }
         }
 
-        for &p in &topo.free_points {
-            let p = p as usize;
-            state.last[p] = state.positions[p];
-            state.positions[p] = self.x[p];
-        }
-        // NOTE: a diverged solve is reported before self-collision, whose spatial hash cannot
-        // index non-finite positions.
-        if let Some(i) = state.first_non_finite() {
-            return Err(SolveError::non_finite(mesh, i));
-        }
-        if params.self_collision {
-            self.hash
-                .resolve(mesh, &mut state.positions, params.steps_per_frame);
-        }
-        apply_colliders(colliders, mesh.pinned(), &mut state.positions, &state.last);
-        match state.first_non_finite() {
-            Some(i) => Err(SolveError::non_finite(mesh, i)),
-            None => Ok(StepReport {
-                iterations: params.iterations,
-                residual,
-            }),
-        }
+        commit(
+            mesh,
+            colliders,
+            params,
+            state,
+            &topo.free_points,
+            &self.x,
+            &mut self.hash,
+        )?;
+        Ok(StepReport {
+            iterations: params.iterations,
+            residual,
+        })
     }
 }
 

@@ -49,11 +49,10 @@
 //! Provot sweep could not undo a step's worth of stretch.
 
 use cloth_mesh::{ClothMesh, ClothState, Vec3};
-use cloth_solver::{
-    Collider, SolveError, Solver, SpatialHash, StepParams, StepReport, apply_colliders,
-};
+use cloth_solver::{Collider, SolveError, Solver, SpatialHash, StepParams, StepReport};
 
 use crate::cholesky::Cholesky;
+use crate::commit::{commit, inertial_prediction};
 use crate::spring_energy::{SpringLaw, limiter_stiffness};
 use crate::topology::{NONE, Topology};
 
@@ -350,15 +349,7 @@ impl Solver for ImplicitEuler {
             weight: params.gravity * mass,
         };
 
-        // y = x0 + h v0 / (1 + c h) with v0 = (x0 - last) / h; pinned points stay put.
-        let x0 = &state.positions;
-        self.y.clear();
-        self.y.extend(
-            x0.iter()
-                .zip(&state.last)
-                .zip(mesh.pinned())
-                .map(|((&p, &l), &pin)| if pin { p } else { p + (p - l) / (1.0 + c * h) }),
-        );
+        inertial_prediction(mesh, state, c * h, &mut self.y);
         self.x.clone_from(&self.y);
         let n = 3 * topo.free();
         self.grad.resize(n, 0.0);
@@ -415,29 +406,19 @@ impl Solver for ImplicitEuler {
             }
         }
 
-        // Commit: last = x0 for free points, so (x - last) / h is the new velocity.
-        for &p in &topo.free_points {
-            let p = p as usize;
-            state.last[p] = state.positions[p];
-            state.positions[p] = self.x[p];
-        }
-        // NOTE: a diverged solve is reported before self-collision, whose spatial hash cannot
-        // index non-finite positions.
-        if let Some(i) = state.first_non_finite() {
-            return Err(SolveError::non_finite(mesh, i));
-        }
-        if params.self_collision {
-            self.hash
-                .resolve(mesh, &mut state.positions, params.steps_per_frame);
-        }
-        apply_colliders(colliders, mesh.pinned(), &mut state.positions, &state.last);
-        match state.first_non_finite() {
-            Some(i) => Err(SolveError::non_finite(mesh, i)),
-            None => Ok(StepReport {
-                iterations,
-                residual,
-            }),
-        }
+        commit(
+            mesh,
+            colliders,
+            params,
+            state,
+            &topo.free_points,
+            &self.x,
+            &mut self.hash,
+        )?;
+        Ok(StepReport {
+            iterations,
+            residual,
+        })
     }
 }
 

@@ -18,6 +18,7 @@
 //! change the step.
 
 mod cholesky;
+mod commit;
 mod fast_implicit;
 mod implicit_euler;
 mod retime;

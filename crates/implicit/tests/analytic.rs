@@ -39,7 +39,10 @@ fn params(ks: f64) -> StepParams {
 fn rest_state(solver: &mut dyn Solver, mesh: &ClothMesh, params: &StepParams) -> ClothState {
     let mut state = ClothState::new(mesh);
     let (steps, moved) = settle(solver, mesh, params, &mut state, 1e-12, 2000).unwrap();
-    assert!(moved <= 1e-12, "still moving {moved:e} m after {steps} steps");
+    assert!(
+        moved <= 1e-12,
+        "still moving {moved:e} m after {steps} steps"
+    );
     state
 }
 

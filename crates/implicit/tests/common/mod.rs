@@ -27,7 +27,10 @@ pub fn pinned2(n: usize) -> ClothMesh {
 
 /// The largest distance between corresponding points.
 pub fn max_distance(a: &[Vec3], b: &[Vec3]) -> f64 {
-    a.iter().zip(b).map(|(p, q)| (p - q).norm()).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (p - q).norm())
+        .fold(0.0, f64::max)
 }
 
 /// Runs frames until a frame moves no point farther than `still` metres, at most `max_frames`;
