@@ -1,0 +1,580 @@
+//! Backward Euler by Newton's method on the incremental potential.
+//!
+//! # Method
+//!
+//! With drag `c` ([`StepParams::drag_rate`]), backward Euler for `m v' = F(x) - c m v` over a
+//! step `h` is
+//!
+//! ```text
+//! v1 = v0 + h (F(x1)/m - c v1),   x1 = x0 + h v1
+//! ```
+//!
+//! which is the stationarity condition of the *incremental potential*
+//!
+//! ```text
+//! Phi(x) = (1 + c h) / (2 h^2) |x - y|_M^2 + E(x),   y = x0 + h v0 / (1 + c h),
+//! E(x)   = sum_springs k/2 (|d| - L)^2 + k_lim/2 max(0, |d| - 1.1 L)^2 - sum_i m g . x_i
+//! ```
+//!
+//! (`y` is the damped inertial prediction, `d = x_b - x_a`). Each step minimises `Phi` over the
+//! free points by Newton's method: the Hessian is the mass term `m (1 + c h) / h^2 I` plus, per
+//! spring, `K = E'' u u^T + max(0, T/|d|) (I - u u^T)` on the blocks of its ends (`T` the
+//! tension; the clamp keeps `K` positive semi-definite under compression, see
+//! [`limiter_stiffness`](crate::limiter_stiffness) for `k_lim`). The system
+//! `H dx = -grad Phi` is solved by faer's sparse Cholesky: the fill-reducing ordering and
+//! symbolic factor are computed once per topology (points, springs, pins) and only the numeric
+//! factor per iteration. A backtracking (Armijo) line search on `Phi` makes every iteration a
+//! descent step. Pinned points are not unknowns: their springs add to their neighbours'
+//! diagonal blocks and gradients only.
+//!
+//! After the solve, self-collision and the collision objects are applied as in
+//! [`cloth_solver::Verlet`], and `last` is set to the start-of-step positions, so that
+//! `(positions - last) / h` is the new velocity.
+//!
+//! # Velocity and solver swaps
+//!
+//! The solver stores nothing between steps: the velocity is `(positions - last) / h` with the
+//! current `h = params.dt()`, exactly Verlet's implied velocity. A live swap with Verlet at the
+//! same `steps_per_frame` therefore keeps the motion. When `h` changes (a different
+//! `steps_per_frame` or `frames_per_sec`), `positions - last` is reinterpreted over the new step,
+//! as in the course's own simulator when the steps per frame are edited; call
+//! [`retime_velocity`](crate::retime_velocity) first to keep the velocity instead.
+//!
+//! # Stability
+//!
+//! Backward Euler is unconditionally stable for this energy: every step lowers `Phi`, so there is
+//! no step-size limit like Verlet's `ks < m / (2 dt^2)`. It damps high frequencies numerically
+//! (first-order accurate), on top of the drag `c`, which is why large-step runs look softer.
+//! The stretch limit is part of the energy, so it holds after a large step where a single
+//! Provot sweep could not undo a step's worth of stretch.
+
+use cloth_mesh::{ClothMesh, ClothState, Vec3};
+use cloth_solver::{Collider, SolveError, Solver, SpatialHash, StepParams, StepReport};
+
+use crate::cholesky::Cholesky;
+use crate::commit::{commit, inertial_prediction};
+use crate::spring_energy::{SpringLaw, limiter_stiffness};
+use crate::topology::{NONE, Topology};
+
+/// By default Newton stops once its step moves no point farther than this, metres (1 um: a
+/// twentieth of the 0.1 % stretch of a 2 cm spring, far below a terminal cell, and a velocity
+/// error under 1e-4 m/s at one step per frame). Each iteration costs a numeric factorisation, so
+/// a tighter default would mostly buy invisible digits; see [`ImplicitEuler::with_tolerance`].
+pub const NEWTON_TOLERANCE: f64 = 1e-6;
+
+/// At most this many Newton iterations per step; a step that has not converged by then keeps its
+/// last (energy-decreasing) iterate and reports its residual.
+pub const MAX_NEWTON_ITERATIONS: u32 = 50;
+
+/// Armijo's sufficient-decrease constant.
+const ARMIJO: f64 = 1e-4;
+
+/// Halvings of the line search before giving up on an iteration (step scaled by 2^-40).
+const MAX_HALVINGS: u32 = 40;
+
+/// The implicit (backward Euler) solver: Newton's method with a line search on the incremental
+/// potential, on faer's sparse Cholesky. See the module documentation for the method.
+///
+/// Owns only caches (the topology and the symbolic factor) and scratch memory.
+#[derive(Debug)]
+pub struct ImplicitEuler {
+    tolerance: f64,
+    system: Option<System>,
+    /// The gradient of `Phi` (3 per free point).
+    grad: Vec<f64>,
+    /// Lower-triangle values of the Newton matrix, in the block pattern's order.
+    values: Vec<f64>,
+    /// The negated gradient, then the Newton step (3 per free point).
+    rhs: Vec<f64>,
+    y: Vec<Vec3>,
+    x: Vec<Vec3>,
+    trial: Vec<Vec3>,
+    hash: SpatialHash,
+}
+
+/// The cached linear system of one topology.
+#[derive(Debug)]
+struct System {
+    topo: Topology,
+    chol: Cholesky,
+    /// Column starts of the block pattern (a copy of the factor's, borrowed while assembling).
+    col_ptr: Vec<usize>,
+}
+
+/// Everything one Newton step needs besides positions.
+struct Problem<'a> {
+    mesh: &'a ClothMesh,
+    topo: &'a Topology,
+    laws: Vec<SpringLaw>,
+    /// `m (1 + c h) / h^2`, N/m.
+    inertia: f64,
+    /// `m g`, N.
+    weight: Vec3,
+}
+
+impl ImplicitEuler {
+    /// A new solver with the default [`NEWTON_TOLERANCE`]; its caches are built on the first
+    /// step.
+    #[must_use]
+    pub fn new() -> Self {
+        Self::with_tolerance(NEWTON_TOLERANCE)
+    }
+
+    /// A new solver whose Newton iterations stop once a step moves no point farther than
+    /// `tolerance` metres (non-finite or negative values mean the default).
+    #[must_use]
+    pub fn with_tolerance(tolerance: f64) -> Self {
+        let tolerance = if tolerance.is_finite() && tolerance >= 0.0 {
+            tolerance
+        } else {
+            NEWTON_TOLERANCE
+        };
+        Self {
+            tolerance,
+            system: None,
+            grad: Vec::new(),
+            values: Vec::new(),
+            rhs: Vec::new(),
+            y: Vec::new(),
+            x: Vec::new(),
+            trial: Vec::new(),
+            hash: SpatialHash::default(),
+        }
+    }
+
+    /// Makes sure the topology and symbolic factor describe `mesh`.
+    fn prepare(&mut self, mesh: &ClothMesh) -> Result<(), SolveError> {
+        if self.system.as_ref().is_some_and(|s| s.topo.matches(mesh)) {
+            return Ok(());
+        }
+        self.system = None;
+        let topo = Topology::new(mesh);
+        let (col_ptr, row_idx) = topo.block_pattern();
+        let chol = Cholesky::new(col_ptr.clone(), row_idx, 1).map_err(method_error)?;
+        self.system = Some(System {
+            topo,
+            chol,
+            col_ptr,
+        });
+        Ok(())
+    }
+}
+
+fn method_error(reason: String) -> SolveError {
+    SolveError::Method {
+        solver: "implicit",
+        reason,
+    }
+}
+
+impl Default for ImplicitEuler {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Problem<'_> {
+    fn law(&self, s: usize) -> SpringLaw {
+        self.laws[s]
+    }
+
+    /// `Phi(x) - Phi(y)` up to the spring energy's constant, computed relative to `y` so that
+    /// the large `m g . x` terms cancel exactly rather than in rounding.
+    fn potential(&self, x: &[Vec3], y: &[Vec3]) -> f64 {
+        let mut phi = 0.0;
+        for &p in &self.topo.free_points {
+            let dx = x[p as usize] - y[p as usize];
+            phi += 0.5 * self.inertia * dx.norm_squared() - self.weight.dot(&dx);
+        }
+        for (i, s) in self.mesh.springs().iter().enumerate() {
+            let law = self.law(i);
+            if law.k == 0.0 && law.k_lim == 0.0 {
+                continue;
+            }
+            let len = (x[s.b as usize] - x[s.a as usize]).norm();
+            phi += law.energy(len);
+        }
+        phi
+    }
+
+    /// Writes `grad Phi` at `x` into `grad` (3 per free point) and, when `values` is given, the
+    /// Newton matrix's lower triangle into it.
+    fn assemble(
+        &self,
+        x: &[Vec3],
+        y: &[Vec3],
+        col_ptr: &[usize],
+        grad: &mut [f64],
+        mut values: Option<&mut [f64]>,
+    ) {
+        let topo = self.topo;
+        if let Some(v) = values.as_deref_mut() {
+            v.fill(0.0);
+        }
+        for (f, &p) in topo.free_points.iter().enumerate() {
+            let g = (x[p as usize] - y[p as usize]) * self.inertia - self.weight;
+            grad[3 * f..3 * f + 3].copy_from_slice(g.as_slice());
+            if let Some(v) = values.as_deref_mut() {
+                for c in 0..3 {
+                    v[col_ptr[3 * f + c]] += self.inertia;
+                }
+            }
+        }
+        for (i, s) in self.mesh.springs().iter().enumerate() {
+            let law = self.law(i);
+            if law.k == 0.0 && law.k_lim == 0.0 {
+                continue;
+            }
+            let (a, b) = (s.a as usize, s.b as usize);
+            let (fa, fb) = (topo.free_index[a], topo.free_index[b]);
+            if fa == NONE && fb == NONE {
+                continue;
+            }
+            let d = x[b] - x[a];
+            let len = d.norm();
+            // NOTE: coincident ends have no direction; the energy is not differentiable there
+            // and the spring is skipped for this iteration (the mass term keeps H definite).
+            if len == 0.0 {
+                continue;
+            }
+            let u = d / len;
+            let f = u * law.tension(len);
+            // dE/dx_b = T u, dE/dx_a = -T u.
+            if fb != NONE {
+                add3(grad, fb as usize, &f);
+            }
+            if fa != NONE {
+                add3(grad, fa as usize, &(-f));
+            }
+            let Some(v) = values.as_deref_mut() else {
+                continue;
+            };
+            let (along, across) = law.hessian(len);
+            let mut k = [[0.0; 3]; 3];
+            for (r, row) in k.iter_mut().enumerate() {
+                for (c, e) in row.iter_mut().enumerate() {
+                    let uu = u[r] * u[c];
+                    let id = if r == c { 1.0 } else { 0.0 };
+                    *e = along * uu + across * (id - uu);
+                }
+            }
+            for fr in [fa, fb] {
+                if fr == NONE {
+                    continue;
+                }
+                let f = fr as usize;
+                for c in 0..3 {
+                    for r in c..3 {
+                        v[col_ptr[3 * f + c] + (r - c)] += k[r][c];
+                    }
+                }
+            }
+            let slot = topo.spring_slot[i];
+            if slot != NONE {
+                let lo = fa.min(fb) as usize;
+                for c in 0..3 {
+                    let base = col_ptr[3 * lo + c] + (3 - c) + 3 * slot as usize;
+                    for r in 0..3 {
+                        v[base + r] -= k[r][c];
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn add3(v: &mut [f64], f: usize, g: &Vec3) {
+    v[3 * f] += g.x;
+    v[3 * f + 1] += g.y;
+    v[3 * f + 2] += g.z;
+}
+
+/// `x += alpha dx` on the free points (`dx` stored 3 per free point).
+fn apply_step(free_points: &[u32], x: &mut [Vec3], dx: &[f64], alpha: f64) {
+    for (&p, d) in free_points.iter().zip(dx.chunks_exact(3)) {
+        x[p as usize] += Vec3::new(d[0], d[1], d[2]) * alpha;
+    }
+}
+
+/// The largest point displacement of a step stored 3 per free point.
+fn max_point_norm(dx: &[f64]) -> f64 {
+    dx.chunks_exact(3)
+        .map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt())
+        .fold(0.0, f64::max)
+}
+
+impl Solver for ImplicitEuler {
+    fn name(&self) -> &'static str {
+        "implicit"
+    }
+
+    fn step(
+        &mut self,
+        mesh: &ClothMesh,
+        colliders: &[Collider],
+        params: &StepParams,
+        state: &mut ClothState,
+    ) -> Result<StepReport, SolveError> {
+        params.validate()?;
+        self.prepare(mesh)?;
+        let Some(System {
+            topo,
+            chol,
+            col_ptr,
+        }) = self.system.as_mut()
+        else {
+            return Err(method_error("no linear system was built".to_owned()));
+        };
+        let h = params.dt();
+        let c = params.drag_rate();
+        let mass = mesh.point_mass(params.density);
+        let k_lim = if params.stretch_limit {
+            limiter_stiffness(mesh, params)
+        } else {
+            0.0
+        };
+        let problem = Problem {
+            mesh,
+            topo,
+            laws: mesh
+                .springs()
+                .iter()
+                .map(|s| SpringLaw {
+                    k: params.stiffness(s.kind),
+                    rest: s.rest,
+                    k_lim,
+                })
+                .collect(),
+            inertia: mass * (1.0 + c * h) / (h * h),
+            weight: params.gravity * mass,
+        };
+
+        inertial_prediction(mesh, state, c * h, &mut self.y);
+        self.x.clone_from(&self.y);
+        let n = 3 * topo.free();
+        self.grad.resize(n, 0.0);
+        self.rhs.resize(n, 0.0);
+        self.values.resize(chol.nnz(), 0.0);
+
+        let mut iterations = 0;
+        let mut residual = 0.0;
+        while iterations < MAX_NEWTON_ITERATIONS {
+            iterations += 1;
+            problem.assemble(
+                &self.x,
+                &self.y,
+                col_ptr,
+                &mut self.grad,
+                Some(&mut self.values),
+            );
+            chol.factorize(&self.values).map_err(method_error)?;
+            for (r, g) in self.rhs.iter_mut().zip(&self.grad) {
+                *r = -g;
+            }
+            chol.solve_in_place(&mut self.rhs).map_err(method_error)?;
+            let dx = &self.rhs;
+            residual = max_point_norm(dx);
+            if !residual.is_finite() {
+                break;
+            }
+            if residual <= self.tolerance {
+                apply_step(&topo.free_points, &mut self.x, dx, 1.0);
+                break;
+            }
+            // Armijo backtracking on Phi along dx; the slope grad . dx = -dx^T H dx is < 0.
+            let phi0 = problem.potential(&self.x, &self.y);
+            let slope: f64 = self.grad.iter().zip(dx).map(|(g, d)| g * d).sum();
+            let mut alpha = 1.0;
+            let mut accepted = false;
+            for _ in 0..=MAX_HALVINGS {
+                self.trial.clone_from(&self.x);
+                apply_step(&topo.free_points, &mut self.trial, dx, alpha);
+                let phi = problem.potential(&self.trial, &self.y);
+                if phi <= phi0 + ARMIJO * alpha * slope {
+                    accepted = true;
+                    break;
+                }
+                alpha *= 0.5;
+            }
+            if !accepted {
+                // No decrease left that rounding can see: the iterate is as good as it gets.
+                break;
+            }
+            std::mem::swap(&mut self.x, &mut self.trial);
+            if alpha * residual <= self.tolerance {
+                break;
+            }
+        }
+
+        commit(
+            mesh,
+            colliders,
+            params,
+            state,
+            &topo.free_points,
+            &self.x,
+            &mut self.hash,
+        )?;
+        Ok(StepReport {
+            iterations,
+            residual,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cloth_mesh::{GridSpec, SplitMix64};
+
+    /// A 5 x 4 cloth pinned at both ends of row 0, its points moved to `scale` times their
+    /// start positions (x by `sx`, z by `sz`) plus a deterministic jitter of up to `jitter` m
+    /// on every axis.
+    fn deformed(sx: f64, sz: f64, jitter: f64) -> (ClothMesh, Vec<Vec3>) {
+        let mesh = ClothMesh::new(&GridSpec {
+            num_width_points: 5,
+            num_height_points: 4,
+            pinned: vec![(0, 0), (4, 0)],
+            ..GridSpec::default()
+        })
+        .unwrap();
+        let mut rng = SplitMix64::new(5);
+        let x = mesh
+            .start_positions()
+            .iter()
+            .map(|p| {
+                let mut j = || rng.uniform(-jitter, jitter);
+                Vec3::new(p.x * sx + j(), p.y + j(), p.z * sz + j())
+            })
+            .collect();
+        (mesh, x)
+    }
+
+    fn problem<'a>(mesh: &'a ClothMesh, topo: &'a Topology, params: &StepParams) -> Problem<'a> {
+        let h = params.dt();
+        let mass = mesh.point_mass(params.density);
+        let k_lim = limiter_stiffness(mesh, params);
+        Problem {
+            mesh,
+            topo,
+            laws: mesh
+                .springs()
+                .iter()
+                .map(|s| SpringLaw {
+                    k: params.stiffness(s.kind),
+                    rest: s.rest,
+                    k_lim,
+                })
+                .collect(),
+            inertia: mass * (1.0 + params.drag_rate() * h) / (h * h),
+            weight: params.gravity * mass,
+        }
+    }
+
+    #[test]
+    fn the_assembled_hessian_is_the_derivative_of_the_gradient() {
+        // Stretched 15 % along x (limiter active on those springs), 5 % along z (in tension,
+        // limiter off), diagonals at ~8.7 %: every spring is in tension, so the clamp is
+        // inactive and the assembled matrix must be the exact Hessian.
+        let (mesh, x) = deformed(1.15, 1.05, 5e-4);
+        let params = StepParams::default();
+        let topo = Topology::new(&mesh);
+        let p = problem(&mesh, &topo, &params);
+        for (s, law) in mesh.springs().iter().zip(&p.laws) {
+            let len = (x[s.b as usize] - x[s.a as usize]).norm();
+            assert!(len > s.rest, "{s:?} is compressed");
+            // Central differences must not straddle the kink at 1.1 rest.
+            assert!((len - 1.1 * law.rest).abs() > 1e-4, "{s:?} is at the kink");
+        }
+        let (col_ptr, _) = topo.block_pattern();
+        let n = 3 * topo.free();
+        let y = mesh.start_positions().to_vec();
+        let mut values = vec![0.0; *col_ptr.last().unwrap()];
+        let mut grad = vec![0.0; n];
+        p.assemble(&x, &y, &col_ptr, &mut grad, Some(&mut values));
+        let mut dense = vec![vec![0.0; n]; n];
+        let (cp, ri) = topo.block_pattern();
+        for j in 0..n {
+            for e in cp[j]..cp[j + 1] {
+                dense[ri[e]][j] = values[e];
+                dense[j][ri[e]] = values[e];
+            }
+        }
+        let scale = dense.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
+        // Step 1e-7 m. The gradient is a piecewise-smooth function of the positions; its
+        // third derivatives are ~k_lim / L^2 ~ 1e9, so truncation is ~1e-14 * 1e9 = 1e-5 N/m;
+        // rounding of gradients of ~1e6 N is ~2e-10 / 2e-7 = 1e-3 N/m. Against a largest
+        // entry of ~1e8 N/m, a relative 1e-9 (~0.1 N/m) passes only a correct Hessian: the
+        // smallest true terms (mass 515 N/m, bending tension terms ~50 N/m) are far above it.
+        let step = 1e-7;
+        let mut plus = vec![0.0; n];
+        let mut minus = vec![0.0; n];
+        for j in 0..n {
+            let point = topo.free_points[j / 3] as usize;
+            let mut xp = x.clone();
+            xp[point][j % 3] += step;
+            p.assemble(&xp, &y, &col_ptr, &mut plus, None);
+            let mut xm = x.clone();
+            xm[point][j % 3] -= step;
+            p.assemble(&xm, &y, &col_ptr, &mut minus, None);
+            for i in 0..n {
+                let fd = (plus[i] - minus[i]) / (2.0 * step);
+                let err = (fd - dense[i][j]).abs();
+                assert!(
+                    err <= 1e-9 * scale,
+                    "H[{i}][{j}] = {} but finite differences give {fd}",
+                    dense[i][j]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn cholesky_succeeds_on_a_compressed_cloth_at_a_huge_step() {
+        // Every spring compressed to ~70 %: the exact Hessian's transverse terms are
+        // k (1 - L/l) ~ -0.43 k, and at h = 100 s the mass term (6e-6 N/m) cannot make up for
+        // them: moving one point out of the cloth's plane is transverse to all its springs, so
+        // the exact Hessian is indefinite and only the clamp keeps the matrix definite.
+        let (mesh, x) = deformed(0.7, 0.7, 1e-3);
+        let params = StepParams {
+            steps_per_frame: 1,
+            frames_per_sec: 0.01,
+            ..StepParams::default()
+        };
+        let topo = Topology::new(&mesh);
+        let p = problem(&mesh, &topo, &params);
+        let (col_ptr, row_idx) = topo.block_pattern();
+        let mut values = vec![0.0; row_idx.len()];
+        let mut grad = vec![0.0; 3 * topo.free()];
+        p.assemble(&x, &x, &col_ptr, &mut grad, Some(&mut values));
+        let mut chol = Cholesky::new(col_ptr, row_idx, 1).unwrap();
+        chol.factorize(&values).unwrap();
+        // And the solution is a descent direction: grad . H^-1 grad > 0.
+        let mut dx = grad.clone();
+        chol.solve_in_place(&mut dx).unwrap();
+        let slope: f64 = grad.iter().zip(&dx).map(|(g, d)| g * d).sum();
+        assert!(slope > 0.0);
+    }
+
+    #[test]
+    fn pinned_points_never_move_and_velocity_is_committed_to_last() {
+        let (mesh, _) = deformed(1.0, 1.0, 0.0);
+        let mut state = ClothState::new(&mesh);
+        let params = StepParams {
+            steps_per_frame: 1,
+            ..StepParams::default()
+        };
+        let mut solver = ImplicitEuler::new();
+        solver.step(&mesh, &[], &params, &mut state).unwrap();
+        let before = state.positions.clone();
+        solver.step(&mesh, &[], &params, &mut state).unwrap();
+        for (i, &pin) in mesh.pinned().iter().enumerate() {
+            if pin {
+                assert_eq!(state.positions[i], mesh.start_positions()[i]);
+            } else {
+                // last holds the start-of-step positions: (x - last) / h is the new velocity.
+                assert_eq!(state.last[i], before[i]);
+            }
+        }
+    }
+}
