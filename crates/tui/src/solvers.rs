@@ -9,6 +9,11 @@ use cloth_solver::{Solver, SolverKind, Verlet};
 pub fn build(kind: SolverKind) -> anyhow::Result<Box<dyn Solver>> {
     match kind {
         SolverKind::Verlet => Ok(Box::new(Verlet::new())),
+        #[cfg(feature = "implicit")]
+        SolverKind::Implicit => Ok(Box::new(cloth_implicit::ImplicitEuler::new())),
+        #[cfg(feature = "implicit")]
+        SolverKind::FastImplicit => Ok(Box::new(cloth_implicit::FastImplicit::new())),
+        #[cfg(not(feature = "implicit"))]
         SolverKind::Implicit | SolverKind::FastImplicit => anyhow::bail!(
             "the {kind} solver is not built into this clothsim; rebuild with `--features implicit`"
         ),
