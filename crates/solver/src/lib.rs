@@ -9,6 +9,7 @@
 //!
 //! Units are SI throughout: metres, seconds, kilograms, newtons.
 
+mod bench;
 mod collider;
 mod diagnostics;
 mod error;
@@ -18,6 +19,7 @@ mod self_collision;
 mod stretch;
 mod verlet;
 
+pub use bench::{BenchResult, BenchRun, pinned_grid, time_frames};
 pub use cloth_mesh::{ClothMesh, ClothState, Vec3};
 pub use collider::{Collider, Plane, Sphere, apply_colliders};
 pub use diagnostics::{kinetic_energy, max_stretch_ratio};
@@ -26,7 +28,7 @@ pub use kind::{SolverKind, UnknownSolver};
 pub use params::{MAX_STRETCH, ParamError, REFERENCE_STEPS_PER_FRAME, StepParams};
 pub use self_collision::SpatialHash;
 pub use stretch::limit_stretch;
-pub use verlet::Verlet;
+pub use verlet::{ConstraintOrder, Verlet};
 
 /// What one step did, for status lines and tests.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

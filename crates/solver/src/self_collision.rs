@@ -5,15 +5,57 @@ use cloth_mesh::{ClothMesh, Vec3};
 /// A spatial hash of the cloth's points in boxes of `3 * width / nw` by `3 * height / nh` by the
 /// larger of the two, exactly the course's boxes, so the same pairs of points interact.
 ///
-/// The course keys a `std::unordered_map` by a float hash of the box; we key by the box's integer
-/// coordinates, sorted once per step, which groups the same points without float-hash collisions
-/// and without allocating once the arrays have grown.
+/// The course keys a `std::unordered_map` by a float hash of the box. We key by the box's integer
+/// coordinates and group points with a counting sort:
+///
+/// 1. each point's box key goes through an open-addressing table (linear probing, twice as many
+///    slots as points) that hands out dense cell numbers; slots are marked with a generation
+///    stamp, so the table is never cleared or reallocated between steps;
+/// 2. a count per cell, a prefix sum and one placement pass lay the points out cell by cell.
+///
+/// Every pass is linear in the number of points and, once the arrays have grown, nothing is
+/// allocated. The placement visits points in index order, so each box lists its points in index
+/// order, the order in which the correction sums are taken (part of the faithful result).
 #[derive(Debug, Default, Clone)]
 pub struct SpatialHash {
-    /// `(box key, point index)`, sorted: each box's points are contiguous, in index order.
-    entries: Vec<(u64, u32)>,
-    /// For each point, the `[start, end)` range of its box in `entries`.
-    range_of: Vec<(u32, u32)>,
+    /// Cell number of each point.
+    cell_of: Vec<u32>,
+    /// `start[c]..start[c + 1]` is cell `c`'s range in `members` (length cells + 1).
+    start: Vec<u32>,
+    /// Point indices grouped by cell.
+    members: Vec<u32>,
+    /// The open-addressing table: box key, cell number, and the generation that wrote the slot
+    /// (a slot whose stamp is not the current one is empty).
+    slots: Vec<Slot>,
+    /// The current generation; bumped by every rebuild.
+    stamp: u32,
+}
+
+#[derive(Debug, Default, Clone, Copy)]
+struct Slot {
+    key: u64,
+    cell: u32,
+    stamp: u32,
+}
+
+/// Squared distance of two points, summed as `(x^2 + y^2) + z^2` like nalgebra's `norm`.
+#[inline]
+pub(crate) fn dist2(d: &Vec3) -> f64 {
+    d.x * d.x + d.y * d.y + d.z * d.z
+}
+
+/// `floor(v)` as an integer, for box indices.
+///
+/// NOTE: `f64::floor` is a libm call on baseline x86-64 (no SSE4.1) and was 4 % of a step.
+/// Truncate-and-correct gives the same integer for every |v| < 2^53; beyond that (a point
+/// millions of boxes away) the box index may differ by one, which only changes which far-away
+/// points share a box, never a correction, because such points are far beyond `2 * thickness`.
+#[inline]
+fn floor_to_i64(v: f64) -> i64 {
+    let t = v as i64;
+    // NOTE: wrapping: a diverged (huge or infinite) coordinate saturates `t`, and must not
+    // overflow here; any box will do for it, the step reports the non-finite state.
+    t.wrapping_sub(i64::from((t as f64) > v))
 }
 
 impl SpatialHash {
@@ -26,46 +68,90 @@ impl SpatialHash {
         (w, h, w.max(h))
     }
 
+    #[inline]
     fn key(p: &Vec3, (w, h, t): (f64, f64, f64)) -> u64 {
         // 21 bits per axis, offset so negative boxes stay distinct; a box index beyond +-2^20
         // (a cloth a million boxes away) wraps, which only merges far-apart boxes: harmless,
         // the distance test still rejects the pairs.
-        let q = |v: f64, s: f64| ((v / s).floor() as i64 + (1 << 20)) as u64 & 0x1F_FFFF;
+        let q = |v: f64, s: f64| floor_to_i64(v / s).wrapping_add(1 << 20) as u64 & 0x1F_FFFF;
         (q(p.x, w) << 42) | (q(p.y, h) << 21) | q(p.z, t)
     }
 
     /// Rebuilds the hash from `positions`.
     pub fn rebuild(&mut self, mesh: &ClothMesh, positions: &[Vec3]) {
         let size = Self::box_size(mesh);
-        self.entries.clear();
-        self.entries.extend(
-            positions
-                .iter()
-                .enumerate()
-                .map(|(i, p)| (Self::key(p, size), i as u32)),
-        );
-        self.entries.sort_unstable();
-        self.range_of.resize(positions.len(), (0, 0));
-        let mut start = 0;
-        while start < self.entries.len() {
-            let key = self.entries[start].0;
-            let mut end = start + 1;
-            while end < self.entries.len() && self.entries[end].0 == key {
-                end += 1;
-            }
-            for &(_, i) in &self.entries[start..end] {
-                self.range_of[i as usize] = (start as u32, end as u32);
-            }
-            start = end;
+        let n = positions.len();
+        // A load factor of at most 1/2 keeps linear-probing chains short.
+        let table = (2 * n).next_power_of_two().max(16);
+        if self.slots.len() != table {
+            self.slots.clear();
+            self.slots.resize(table, Slot::default());
+            self.stamp = 0;
         }
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            // NOTE: after 2^32 rebuilds the stamps wrap; clear so no stale slot looks current.
+            self.slots.fill(Slot::default());
+            self.stamp = 1;
+        }
+        let shift = 64 - table.trailing_zeros();
+        let mask = table - 1;
+
+        // Cell number per point; `start` first holds the count per cell.
+        self.cell_of.resize(n, 0);
+        self.start.clear();
+        for (p, cell_of) in positions.iter().zip(&mut self.cell_of) {
+            let key = Self::key(p, size);
+            // Fibonacci hashing: the top bits of key * 2^64/phi spread neighbouring boxes.
+            let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
+            let cell = loop {
+                let s = &mut self.slots[slot];
+                if s.stamp != self.stamp {
+                    *s = Slot {
+                        key,
+                        cell: self.start.len() as u32,
+                        stamp: self.stamp,
+                    };
+                    self.start.push(0);
+                    break s.cell;
+                }
+                if s.key == key {
+                    break s.cell;
+                }
+                slot = (slot + 1) & mask;
+            };
+            *cell_of = cell;
+            self.start[cell as usize] += 1;
+        }
+
+        // Exclusive prefix sum, then place points in index order; afterwards `start[c]` has
+        // advanced to the end of cell c, so shifting by one restores the starts.
+        let mut sum = 0;
+        for s in &mut self.start {
+            let count = *s;
+            *s = sum;
+            sum += count;
+        }
+        self.start.push(sum);
+        self.members.resize(n, 0);
+        for (i, &c) in self.cell_of.iter().enumerate() {
+            let s = &mut self.start[c as usize];
+            self.members[*s as usize] = i as u32;
+            *s += 1;
+        }
+        self.start.rotate_right(1);
+        self.start[0] = 0;
     }
 
     /// The points in point `i`'s box (including `i`), in index order, as of the last rebuild.
     pub fn box_of(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
-        let (s, e) = self.range_of[i];
-        self.entries[s as usize..e as usize]
-            .iter()
-            .map(|&(_, j)| j as usize)
+        self.cell_members(i).iter().map(|&j| j as usize)
+    }
+
+    #[inline]
+    fn cell_members(&self, i: usize) -> &[u32] {
+        let c = self.cell_of[i] as usize;
+        &self.members[self.start[c] as usize..self.start[c + 1] as usize]
     }
 
     /// Pushes every unpinned point away from the other points of its box that are closer than
@@ -75,36 +161,166 @@ impl SpatialHash {
     /// those before it, as in the course; the hash itself is built before any correction.
     pub fn resolve(&mut self, mesh: &ClothMesh, positions: &mut [Vec3], steps_per_frame: u32) {
         self.rebuild(mesh, positions);
-        let reach = 2.0 * mesh.thickness();
-        let steps = f64::from(steps_per_frame);
+        let repulsion = Repulsion::new(mesh, steps_per_frame);
+        let pinned = mesh.pinned();
         for i in 0..positions.len() {
-            if mesh.pinned()[i] {
-                continue;
-            }
-            let (s, e) = self.range_of[i];
-            if e - s < 2 {
-                continue;
-            }
-            let p = positions[i];
-            let mut correction = Vec3::zeros();
-            let mut count = 0u32;
-            for &(_, j) in &self.entries[s as usize..e as usize] {
-                let j = j as usize;
-                if j == i {
-                    continue;
-                }
-                let d = p - positions[j];
-                let dist = d.norm();
-                // NOTE: coincident points (dist == 0) have no direction to separate along; the
-                // course would produce NaN here, we skip the pair.
-                if dist < reach && dist > 0.0 {
-                    correction += d * ((reach - dist) / dist);
-                    count += 1;
+            if !pinned[i] {
+                if let Some(p) = repulsion.corrected(self.cell_members(i), i, positions) {
+                    positions[i] = p;
                 }
             }
-            if count > 0 {
-                positions[i] = p + correction / f64::from(count) / steps;
+        }
+    }
+
+    /// [`SpatialHash::resolve`] in an order threads can share ([`ConstraintOrder::Parallel`]):
+    /// every point's correction is computed from the positions at the start of the pass
+    /// (kept in `snapshot`), rather than from the already-corrected positions of the points
+    /// before it. The pairs, the repulsion and its averaging are the course's.
+    ///
+    /// [`ConstraintOrder::Parallel`]: crate::ConstraintOrder::Parallel
+    pub(crate) fn resolve_from_snapshot(
+        &mut self,
+        mesh: &ClothMesh,
+        positions: &mut [Vec3],
+        snapshot: &mut Vec<Vec3>,
+        steps_per_frame: u32,
+        pool: Option<&rayon::ThreadPool>,
+    ) {
+        use rayon::prelude::*;
+        // Chunks of a few thousand points amortise rayon's task cost; the result does not
+        // depend on the chunking or the thread count.
+        const CHUNK: usize = 4096;
+        self.rebuild(mesh, positions);
+        snapshot.clear();
+        snapshot.extend_from_slice(positions);
+        let repulsion = Repulsion::new(mesh, steps_per_frame);
+        let pinned = mesh.pinned();
+        let (hash, snapshot) = (&*self, &snapshot[..]);
+        let correct = |c: usize, out: &mut [Vec3]| {
+            for (k, p) in out.iter_mut().enumerate() {
+                let i = c * CHUNK + k;
+                if !pinned[i] {
+                    if let Some(q) = repulsion.corrected(hash.cell_members(i), i, snapshot) {
+                        *p = q;
+                    }
+                }
             }
+        };
+        match pool {
+            Some(pool) => pool.install(|| {
+                positions
+                    .par_chunks_mut(CHUNK)
+                    .enumerate()
+                    .for_each(|(c, out)| correct(c, out));
+            }),
+            None => positions
+                .chunks_mut(CHUNK)
+                .enumerate()
+                .for_each(|(c, out)| correct(c, out)),
+        }
+    }
+}
+
+/// The course's repulsion between points of a box.
+#[derive(Debug, Clone, Copy)]
+struct Repulsion {
+    /// `2 * thickness`, metres.
+    reach: f64,
+    /// Squared distances at or above this are certainly out of reach (see `corrected`).
+    reach2_out: f64,
+    /// Steps per frame: the averaged correction is divided by it.
+    steps: f64,
+}
+
+impl Repulsion {
+    fn new(mesh: &ClothMesh, steps_per_frame: u32) -> Self {
+        let reach = 2.0 * mesh.thickness();
+        // NOTE: a pair is skipped without its square root when `d^2 >= reach2_out`. That is
+        // exact: `reach2_out` is at least the real reach^2 (the product's rounding, half an ulp,
+        // is far inside the 4-ulp margin), so such a pair has a real distance >= reach, and the
+        // correctly rounded sqrt cannot fall below the representable `reach` either.
+        Self {
+            reach,
+            reach2_out: reach * reach * (1.0 + 4.0 * f64::EPSILON),
+            steps: f64::from(steps_per_frame),
+        }
+    }
+
+    /// Point `i`'s corrected position given the positions of the `members` of its box, or
+    /// `None` when no other member is within reach.
+    #[inline]
+    fn corrected(&self, members: &[u32], i: usize, positions: &[Vec3]) -> Option<Vec3> {
+        if members.len() < 2 {
+            return None;
+        }
+        let p = positions[i];
+        let mut correction = Vec3::zeros();
+        let mut count = 0u32;
+        for &j in members {
+            let j = j as usize;
+            if j == i {
+                continue;
+            }
+            let d = p - positions[j];
+            let d2 = dist2(&d);
+            if d2 >= self.reach2_out {
+                continue;
+            }
+            let dist = d2.sqrt();
+            // NOTE: coincident points (dist == 0) have no direction to separate along; the
+            // course would produce NaN here, we skip the pair.
+            if dist < self.reach && dist > 0.0 {
+                correction += d * ((self.reach - dist) / dist);
+                count += 1;
+            }
+        }
+        (count > 0).then(|| p + correction / f64::from(count) / self.steps)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cloth_mesh::GridSpec;
+
+    #[test]
+    fn each_box_lists_exactly_the_points_with_its_integer_box_in_index_order() {
+        // A crumpled cloth: points scattered over several boxes (deterministic pseudo-random).
+        let mesh = ClothMesh::new(&GridSpec::default()).unwrap();
+        let mut rng = cloth_mesh::SplitMix64::new(7);
+        let positions: Vec<Vec3> = (0..mesh.len())
+            .map(|_| {
+                Vec3::new(
+                    rng.uniform(-0.2, 0.2),
+                    rng.uniform(-0.2, 0.2),
+                    rng.uniform(-0.2, 0.2),
+                )
+            })
+            .collect();
+        let mut hash = SpatialHash::default();
+        hash.rebuild(&mesh, &positions);
+        let size = SpatialHash::box_size(&mesh);
+        let box_index = |p: &Vec3| {
+            [
+                (p.x / size.0).floor(),
+                (p.y / size.1).floor(),
+                (p.z / size.2).floor(),
+            ]
+        };
+        for i in (0..mesh.len()).step_by(13) {
+            let expected: Vec<usize> = (0..mesh.len())
+                .filter(|&j| box_index(&positions[j]) == box_index(&positions[i]))
+                .collect();
+            assert_eq!(hash.box_of(i).collect::<Vec<_>>(), expected);
+        }
+    }
+
+    #[test]
+    fn integer_floor_matches_floor() {
+        for v in [
+            -2.5, -2.0, -1e-300, -0.0, 0.0, 0.3, 1.0, 7.999_999, -7.000_001,
+        ] {
+            assert_eq!(floor_to_i64(v), v.floor() as i64, "{v}");
         }
     }
 }

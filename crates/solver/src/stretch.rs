@@ -1,6 +1,10 @@
 //! Provot's maximum-stretch constraint (step 5 of the course's step).
 
-use cloth_mesh::{Spring, Vec3};
+use std::ops::Range;
+
+use cloth_mesh::{ClothMesh, Spring, Vec3};
+
+use crate::self_collision::dist2;
 
 /// Shortens every spring longer than `ratio * rest` back to exactly that length, in one
 /// in-place sweep in spring order (later springs see earlier corrections, as in the course).
@@ -9,24 +13,212 @@ use cloth_mesh::{Spring, Vec3};
 /// all of it when the other is pinned; springs with both ends pinned are left alone.
 /// Compression is not limited. Every spring type is limited, enabled or not.
 pub fn limit_stretch(springs: &[Spring], pinned: &[bool], positions: &mut [Vec3], ratio: f64) {
+    limit_stretch_from(springs, pinned, positions, 0, ratio);
+}
+
+/// [`limit_stretch`] on a window of the points: `positions[0]` and `pinned[0]` are point
+/// `first`, and every spring's ends lie in the window. Lets threads sweep disjoint bands.
+pub(crate) fn limit_stretch_from(
+    springs: &[Spring],
+    pinned: &[bool],
+    positions: &mut [Vec3],
+    first: usize,
+    ratio: f64,
+) {
     for s in springs {
-        let (a, b) = (s.a as usize, s.b as usize);
-        let d = positions[b] - positions[a];
-        let len = d.norm();
-        let max = ratio * s.rest;
-        if len <= max {
-            continue;
+        let (a, b) = (s.a as usize - first, s.b as usize - first);
+        limit_one(a, b, s.rest, pinned, positions, ratio);
+    }
+}
+
+/// The course's correction of one spring from `a` to `b`.
+#[inline]
+fn limit_one(a: usize, b: usize, rest: f64, pinned: &[bool], positions: &mut [Vec3], ratio: f64) {
+    let d = positions[b] - positions[a];
+    let len2 = dist2(&d);
+    let max = ratio * rest;
+    // NOTE: most springs are inside the limit; `len2 <= max^2 (1 - 4 eps)` proves it without the
+    // square root. It is exact: the computed bound is at most the real max^2 (its rounding is
+    // within the 4-ulp margin), so the real length is <= max, and so is the correctly rounded
+    // sqrt, because `max` is representable and rounding is monotone.
+    if len2 <= max * max * (1.0 - 4.0 * f64::EPSILON) {
+        return;
+    }
+    let len = len2.sqrt();
+    if len <= max {
+        return;
+    }
+    let excess = d * ((len - max) / len);
+    match (pinned[a], pinned[b]) {
+        (true, true) => {}
+        (true, false) => positions[b] -= excess,
+        (false, true) => positions[a] += excess,
+        (false, false) => {
+            let half = excess * 0.5;
+            positions[a] += half;
+            positions[b] -= half;
         }
-        let excess = d * ((len - max) / len);
-        match (pinned[a], pinned[b]) {
-            (true, true) => {}
-            (true, false) => positions[b] -= excess,
-            (false, true) => positions[a] += excess,
-            (false, false) => {
-                let half = excess * 0.5;
-                positions[a] += half;
-                positions[b] -= half;
+    }
+}
+
+/// The stretch limit's sweep cut into row bands that threads can share
+/// ([`ConstraintOrder::Parallel`]).
+///
+/// Springs are emitted row by row and reach at most two rows back, so the springs of a run of
+/// rows are a contiguous part of the spring list and touch only those rows and the two before.
+/// The rows are cut into blocks separated by two-row seams: the blocks touch disjoint points and
+/// are swept at once, each in spring order; then the seams (also disjoint from each other) are
+/// swept at once. Every spring is visited exactly once and corrected exactly as in the course;
+/// only a seam's springs come after the block above them instead of before.
+///
+/// NOTE: the cut depends only on the mesh (at most [`StretchBands::BLOCKS`] blocks), never on the
+/// thread count, so results are the same on any number of threads.
+///
+/// [`ConstraintOrder::Parallel`]: crate::ConstraintOrder::Parallel
+#[derive(Debug, Default, Clone)]
+pub(crate) struct StretchBands {
+    /// Blocks, then seams, each in increasing order of points.
+    blocks: Vec<Band>,
+    seams: Vec<Band>,
+}
+
+#[derive(Debug, Clone)]
+struct Band {
+    /// Its range of the spring list.
+    springs: Range<usize>,
+    /// The points its springs touch.
+    points: Range<usize>,
+}
+
+impl StretchBands {
+    /// The most blocks a sweep is cut into: enough to keep a few threads busy, few enough that
+    /// the seams (swept after their neighbours) stay a small part of the cloth.
+    pub(crate) const BLOCKS: usize = 8;
+
+    /// Cuts `mesh`'s rows into at most [`Self::BLOCKS`] blocks of at least 4 rows.
+    pub(crate) fn new(mesh: &ClothMesh) -> Self {
+        let (nw, nh) = (mesh.nw(), mesh.nh());
+        let springs = mesh.springs();
+        let band = |r0: usize, r1: usize| Band {
+            springs: springs.partition_point(|s| (s.a as usize) < r0 * nw)
+                ..springs.partition_point(|s| (s.a as usize) < r1 * nw),
+            points: r0.saturating_sub(2) * nw..r1 * nw,
+        };
+        // Blocks of at least 4 rows: block k + 1 then keeps seams k and k + 1 apart (each seam
+        // reaches two rows into the block after it).
+        let blocks = (nh / 6).clamp(1, Self::BLOCKS);
+        let block_rows = nh - 2 * (blocks - 1);
+        let (mut out, mut seams) = (Vec::new(), Vec::new());
+        let mut start = 0;
+        for k in 0..blocks {
+            let end = start + block_rows / blocks + usize::from(k < block_rows % blocks);
+            out.push(band(start, end));
+            if k + 1 < blocks {
+                seams.push(band(end, end + 2));
+            }
+            start = end + 2;
+        }
+        Self { blocks: out, seams }
+    }
+
+    /// The stretch limit in this band order, on `pool`'s threads (or the caller's).
+    pub(crate) fn limit(
+        &self,
+        springs: &[Spring],
+        pinned: &[bool],
+        positions: &mut [Vec3],
+        ratio: f64,
+        pool: Option<&rayon::ThreadPool>,
+    ) {
+        for bands in [&self.blocks, &self.seams] {
+            match pool {
+                Some(pool) => pool.install(|| {
+                    sweep_bands(bands, springs, pinned, positions, 0, ratio, true);
+                }),
+                None => sweep_bands(bands, springs, pinned, positions, 0, ratio, false),
             }
         }
+    }
+}
+
+/// Sweeps disjoint `bands` (in increasing order of points), splitting `positions` (which starts
+/// at point `offset`) between them; halves run in parallel when `parallel`. Recursion rather
+/// than a list of slices, so nothing is allocated.
+fn sweep_bands(
+    bands: &[Band],
+    springs: &[Spring],
+    pinned: &[bool],
+    positions: &mut [Vec3],
+    offset: usize,
+    ratio: f64,
+    parallel: bool,
+) {
+    match bands {
+        [] => {}
+        [b] => limit_stretch_from(
+            &springs[b.springs.clone()],
+            &pinned[b.points.clone()],
+            &mut positions[b.points.start - offset..b.points.end - offset],
+            b.points.start,
+            ratio,
+        ),
+        _ => {
+            let (left, right) = bands.split_at(bands.len() / 2);
+            let split = right[0].points.start;
+            let (lo, hi) = positions.split_at_mut(split - offset);
+            let mut run_left = || sweep_bands(left, springs, pinned, lo, offset, ratio, parallel);
+            let mut run_right = || sweep_bands(right, springs, pinned, hi, split, ratio, parallel);
+            if parallel {
+                rayon::join(run_left, run_right);
+            } else {
+                run_left();
+                run_right();
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cloth_mesh::SpringKind;
+
+    fn spring(rest: f64) -> Spring {
+        Spring {
+            a: 1,
+            b: 0,
+            rest,
+            kind: SpringKind::Structural,
+        }
+    }
+
+    #[test]
+    fn an_overstretched_spring_ends_at_exactly_the_limit_and_a_short_one_is_untouched() {
+        let mut p = vec![Vec3::zeros(), Vec3::new(0.3, 0.4, 0.0)];
+        limit_stretch(&[spring(0.4)], &[false, false], &mut p, 1.1);
+        // Length 0.5 > 0.44: both ends move 0.03 towards each other, along the spring.
+        assert!(((p[1] - p[0]).norm() - 0.44).abs() < 1e-15);
+        assert!((p[0] - Vec3::new(0.018, 0.024, 0.0)).norm() < 1e-15);
+        let before = p.clone();
+        limit_stretch(&[spring(0.41)], &[false, false], &mut p, 1.1);
+        assert_eq!(p, before);
+    }
+
+    #[test]
+    fn a_spring_just_at_the_limit_is_not_moved() {
+        // The skip-without-sqrt bound must not swallow springs a rounding error over the limit,
+        // nor touch one exactly at it.
+        let rest = 1.0 / 49.0;
+        let max = 1.1 * rest;
+        let mut p = vec![Vec3::zeros(), Vec3::new(max, 0.0, 0.0)];
+        limit_stretch(&[spring(rest)], &[false, false], &mut p, 1.1);
+        assert_eq!(p[1].x - p[0].x, max);
+        let over = f64::from_bits(max.to_bits() + 1);
+        let mut p = vec![Vec3::zeros(), Vec3::new(over, 0.0, 0.0)];
+        limit_stretch(&[spring(rest)], &[true, false], &mut p, 1.1);
+        assert_eq!(
+            p[1].x, max,
+            "one ulp over: the free end comes back to the limit"
+        );
     }
 }

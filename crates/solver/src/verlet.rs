@@ -16,27 +16,165 @@
 //! Explicit: stable while `ks` stays below about `m / (2 dt^2)` (2.2e5 N/m at the defaults,
 //! see [`StepParams::explicit_ks_limit`]). Damping acts as a drag of `(d/100)/dt` per second, so
 //! changing the steps per frame changes the effective drag, as it does in the course.
+//!
+//! # Speed
+//!
+//! Steps 1 and 2 run as one sweep over the grid's rows on struct-of-arrays row buffers
+//! (`sweep`), bit-identical to the course's spring loop and shared between threads by rows.
+//! Self-collision groups points with a linear counting sort; the stretch limit skips the square
+//! root of every spring it can prove inside the limit. With [`ConstraintOrder::Faithful`] (the
+//! default) steps 3 and 5 keep the course's sequential order; [`ConstraintOrder::Parallel`]
+//! trades that order for threads.
+
+mod sweep;
+
+use std::sync::Arc;
 
 use cloth_mesh::{ClothMesh, ClothState, Vec3};
+use rayon::prelude::*;
 
 use crate::params::MAX_STRETCH;
+use crate::stretch::StretchBands;
 use crate::{
     Collider, SolveError, Solver, SpatialHash, StepParams, StepReport, apply_colliders,
     limit_stretch,
 };
+use sweep::{RowScratch, Stencil, SweepParams};
 
-/// The faithful explicit Verlet solver. Owns only scratch memory (forces, the spatial hash).
+/// The order in which the two sequential constraint passes (self-collision and the stretch
+/// limit) visit points and springs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ConstraintOrder {
+    /// The course's order: one in-place sweep in spring order for the stretch limit, points in
+    /// index order each seeing earlier corrections for self-collision. Results are the course's.
+    /// These two passes then run on one thread whatever [`Verlet::with_threads`] says.
+    #[default]
+    Faithful,
+    /// An order that threads can share. Self-collision computes every point's correction from
+    /// the positions at the start of the pass (Jacobi) instead of in place (Gauss-Seidel); the
+    /// stretch limit sweeps row blocks at once, then the two-row seams between them. Every pair
+    /// and spring is treated once with the course's formulas, so the constraints are the same;
+    /// only the order of the corrections differs, which moves a settled cloth by far less than
+    /// its thickness (see the solver's tests). Results do not depend on the thread count.
+    Parallel,
+}
+
+/// The faithful explicit Verlet solver. Owns only scratch memory and caches.
 #[derive(Debug, Default, Clone)]
 pub struct Verlet {
-    forces: Vec<Vec3>,
+    /// Worker threads (`None`: run on the caller's thread).
+    pool: Option<Arc<rayon::ThreadPool>>,
+    order: ConstraintOrder,
+    /// The mesh's springs by direction, rebuilt only when the mesh changes.
+    stencil: Option<Stencil>,
+    /// Row buffers, one per band of rows.
+    scratch: Vec<RowScratch>,
+    /// Last positions of the pinned points, kept across the ping-pong swap.
+    pinned_last: Vec<Vec3>,
     hash: SpatialHash,
+    /// The stretch limit's bands for [`ConstraintOrder::Parallel`], rebuilt with the stencil.
+    bands: StretchBands,
+    /// Positions at the start of the parallel self-collision pass.
+    snapshot: Vec<Vec3>,
 }
 
 impl Verlet {
-    /// A new solver; its scratch arrays grow on the first step.
+    /// A new single-threaded, faithful solver; its scratch arrays grow on the first step.
     #[must_use]
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Runs the force and integration sweep on `threads` worker threads (1 or 0: the caller's
+    /// thread). The results are bit-identical for any thread count; the constraint passes share
+    /// the threads only with [`ConstraintOrder::Parallel`].
+    ///
+    /// # Errors
+    /// [`SolveError::Method`] when the thread pool cannot be created.
+    pub fn with_threads(mut self, threads: usize) -> Result<Self, SolveError> {
+        self.pool = if threads <= 1 {
+            None
+        } else {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .map_err(|e| SolveError::Method {
+                    solver: "verlet",
+                    reason: format!("cannot start {threads} threads: {e}"),
+                })?;
+            Some(Arc::new(pool))
+        };
+        Ok(self)
+    }
+
+    /// Chooses the constraint order (see [`ConstraintOrder`]).
+    #[must_use]
+    pub fn with_order(mut self, order: ConstraintOrder) -> Self {
+        self.order = order;
+        self
+    }
+
+    /// Worker threads in use (1 when running on the caller's thread).
+    #[must_use]
+    pub fn threads(&self) -> usize {
+        self.pool.as_ref().map_or(1, |p| p.current_num_threads())
+    }
+
+    /// The constraint order in use.
+    #[must_use]
+    pub fn order(&self) -> ConstraintOrder {
+        self.order
+    }
+
+    /// Steps 1 and 2: forces and the Verlet update, leaving the new positions in `state.last`
+    /// and the old ones in `state.positions` (the caller swaps them).
+    fn forces_and_verlet(
+        &mut self,
+        mesh: &ClothMesh,
+        params: &SweepParams,
+        state: &mut ClothState,
+    ) {
+        let Some(stencil) = self.stencil.as_ref() else {
+            return;
+        };
+        let (nw, nh) = (stencil.nw(), stencil.nh());
+        let positions = &state.positions;
+        let pinned = mesh.pinned();
+        match &self.pool {
+            None => {
+                self.scratch.resize_with(1, RowScratch::default);
+                stencil.sweep(
+                    &mut self.scratch[0],
+                    params,
+                    positions,
+                    pinned,
+                    &mut state.last,
+                    0,
+                    nh,
+                );
+            }
+            Some(pool) => {
+                // A few bands per thread even out rows that cost more (none at present, but
+                // the threads are shared with the rest of the machine).
+                let bands = (4 * pool.current_num_threads()).min(nh);
+                let rows = nh.div_ceil(bands);
+                self.scratch
+                    .resize_with(nh.div_ceil(rows), RowScratch::default);
+                let scratch = &mut self.scratch;
+                pool.install(|| {
+                    state
+                        .last
+                        .par_chunks_mut(rows * nw)
+                        .zip(scratch.par_iter_mut())
+                        .enumerate()
+                        .for_each(|(band, (next, scratch))| {
+                            let r0 = band * rows;
+                            let r1 = (r0 + rows).min(nh);
+                            stencil.sweep(scratch, params, positions, pinned, next, r0, r1);
+                        });
+                });
+            }
+        }
     }
 }
 
@@ -55,48 +193,42 @@ impl Solver for Verlet {
         params.validate()?;
         let mass = mesh.point_mass(params.density);
         let dt = params.dt();
+        let sweep = SweepParams {
+            k: sweep::DIRECTIONS.map(|(_, _, kind)| params.stiffness(kind)),
+            weight: params.gravity * mass,
+            keep: 1.0 - params.damping / 100.0,
+            scale: dt * dt / mass,
+        };
+
+        // 1 and 2. Forces and damped Verlet. The sweep writes the new positions over the last
+        // ones; swapping the arrays makes the old positions the new last ones. Pinned points
+        // keep their last position too, as in the course.
+        if !self.stencil.as_ref().is_some_and(|s| s.matches(mesh)) {
+            self.stencil = Some(Stencil::new(mesh)?);
+            self.bands = StretchBands::new(mesh);
+        }
+        let pins: &[usize] = self.stencil.as_ref().map_or(&[], |s| &s.pins);
+        self.pinned_last.clear();
+        self.pinned_last.extend(pins.iter().map(|&i| state.last[i]));
+        self.forces_and_verlet(mesh, &sweep, state);
+        std::mem::swap(&mut state.positions, &mut state.last);
+        let pins: &[usize] = self.stencil.as_ref().map_or(&[], |s| &s.pins);
+        for (&i, l) in pins.iter().zip(&self.pinned_last) {
+            state.last[i] = *l;
+        }
         let positions = &mut state.positions;
 
-        // 1. Forces.
-        self.forces.clear();
-        self.forces.resize(positions.len(), params.gravity * mass);
-        for s in mesh.springs() {
-            let k = params.stiffness(s.kind);
-            if k == 0.0 {
-                continue;
-            }
-            let (a, b) = (s.a as usize, s.b as usize);
-            let d = positions[b] - positions[a];
-            let len = d.norm();
-            if len == 0.0 {
-                continue;
-            }
-            // Pulls a towards b when stretched.
-            let f = d * (k * (len - s.rest) / len);
-            self.forces[a] += f;
-            self.forces[b] -= f;
-        }
-
-        // 2. Damped Verlet.
-        let keep = 1.0 - params.damping / 100.0;
-        let scale = dt * dt / mass;
-        for (((p, l), f), &pin) in positions
-            .iter_mut()
-            .zip(state.last.iter_mut())
-            .zip(&self.forces)
-            .zip(mesh.pinned())
-        {
-            if pin {
-                continue;
-            }
-            let x = *p;
-            *p = x + (x - *l) * keep + f * scale;
-            *l = x;
-        }
+        let parallel = self.order == ConstraintOrder::Parallel;
+        let pool = self.pool.as_deref();
 
         // 3. Self-collision.
         if params.self_collision {
-            self.hash.resolve(mesh, positions, params.steps_per_frame);
+            if parallel {
+                let (hash, snapshot) = (&mut self.hash, &mut self.snapshot);
+                hash.resolve_from_snapshot(mesh, positions, snapshot, params.steps_per_frame, pool);
+            } else {
+                self.hash.resolve(mesh, positions, params.steps_per_frame);
+            }
         }
 
         // 4. Collision objects.
@@ -104,12 +236,32 @@ impl Solver for Verlet {
 
         // 5. Stretch limit.
         if params.stretch_limit {
-            limit_stretch(mesh.springs(), mesh.pinned(), positions, MAX_STRETCH);
+            if parallel {
+                let (springs, pinned) = (mesh.springs(), mesh.pinned());
+                self.bands
+                    .limit(springs, pinned, positions, MAX_STRETCH, pool);
+            } else {
+                limit_stretch(mesh.springs(), mesh.pinned(), positions, MAX_STRETCH);
+            }
         }
 
+        if all_finite(&state.positions) && all_finite(&state.last) {
+            return Ok(StepReport::default());
+        }
         match state.first_non_finite() {
             Some(i) => Err(SolveError::non_finite(mesh, i)),
             None => Ok(StepReport::default()),
         }
     }
+}
+
+/// Whether every coordinate is finite, without early exit so it vectorises: `v * 0` is 0 for a
+/// finite `v` and NaN for a NaN or an infinity.
+fn all_finite(points: &[Vec3]) -> bool {
+    points.iter().fold(true, |ok, p| {
+        // NOTE: `&`, not `&&`: no early exit, so the loop vectorises.
+        #[allow(clippy::needless_bitwise_bool)]
+        let ok = ok & (p.x * 0.0 + p.y * 0.0 + p.z * 0.0 == 0.0);
+        ok
+    })
 }

@@ -1,0 +1,113 @@
+//! The scene file's JSON schema, as serde types.
+//!
+//! These mirror the file one to one (so a loaded scene saves back in the same shape); range
+//! checks happen afterwards in [`crate::parse`], where the error can name the value and the rule.
+
+use serde::{Deserialize, Serialize};
+
+/// A whole scene file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// clothsim addition: one line saying what the scene shows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// The cloth (required).
+    pub cloth: ClothBlock,
+    /// An optional sphere.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sphere: Option<SphereBlock>,
+    /// An optional plane.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plane: Option<PlaneBlock>,
+    /// clothsim addition: how to run the scene. Every key is optional.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub simulation: Option<SimulationBlock>,
+}
+
+/// The course's `cloth` block: every key but `pinned` is required.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClothBlock {
+    /// Extent along x, metres (> 0).
+    pub width: f64,
+    /// Extent along the second axis, metres (> 0).
+    pub height: f64,
+    /// Points along x (>= 2).
+    pub num_width_points: u64,
+    /// Points along the second axis (>= 2).
+    pub num_height_points: u64,
+    /// Thickness, metres (> 0); self-collision keeps points twice this apart.
+    pub thickness: f64,
+    /// 0 = horizontal (xz-plane at y = 1), 1 = vertical (xy-plane).
+    pub orientation: i64,
+    /// Pinned points as `[column, row]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pinned: Option<Vec<[i64; 2]>>,
+    /// Whether structural springs act.
+    pub enable_structural: bool,
+    /// Whether shearing springs act.
+    pub enable_shearing: bool,
+    /// Whether bending springs act.
+    pub enable_bending: bool,
+    /// Damping, percent, in [0, 100].
+    pub damping: f64,
+    /// Density, kg/m^2 (> 0); shown as g/cm^2 (divided by 10) in the UI.
+    pub density: f64,
+    /// Spring constant, N/m (>= 0).
+    pub ks: f64,
+}
+
+/// The course's `sphere` block.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereBlock {
+    /// Centre, metres.
+    pub origin: [f64; 3],
+    /// Radius, metres (> 0).
+    pub radius: f64,
+    /// Friction in [0, 1].
+    pub friction: f64,
+}
+
+/// The course's `plane` block.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlaneBlock {
+    /// A point on the plane, metres.
+    pub point: [f64; 3],
+    /// Normal (any non-zero length; normalised on load).
+    pub normal: [f64; 3],
+    /// Friction in [0, 1].
+    pub friction: f64,
+}
+
+/// clothsim's `simulation` block; absent keys take the course's values.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationBlock {
+    /// Frames per second of simulated time (default 90).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames_per_sec: Option<f64>,
+    /// Simulation steps per frame (default 30).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub simulation_steps: Option<u64>,
+    /// Gravity, m/s^2 (default [0, -9.8, 0]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gravity: Option<[f64; 3]>,
+    /// Whether self-collision is on (default true).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub self_collision: Option<bool>,
+    /// Whether the 10 % stretch limit is on (default true).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stretch_limit: Option<bool>,
+    /// Solver name: `verlet` (default), `implicit` or `fast-implicit`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solver: Option<String>,
+    /// Inner iterations per step of iterative solvers (default 10).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub iterations: Option<u64>,
+    /// Seed of the vertical cloth's z-jitter (default 184).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+}

@@ -1,0 +1,21 @@
+//! CS184 "ClothSim" scene files: JSON in, a ready-to-run [`Scene`] out.
+//!
+//! The course's five scene files load unchanged. Every `cloth` key but `pinned` is required and
+//! unknown keys are errors, as in the course's loader, so typos are caught. clothsim adds a few
+//! optional keys of its own (all documented on [`SceneFile`]): a top-level `description`, and a
+//! `simulation` block with `frames_per_sec`, `simulation_steps`, `gravity`, `self_collision`,
+//! `stretch_limit`, `solver`, `iterations` and `seed`, so one file fully describes a run.
+//!
+//! Every error names the file, the key, the bad value and what is allowed.
+
+mod bundled;
+mod error;
+mod file;
+mod overrides;
+mod scene;
+
+pub use bundled::{BUNDLED, BundledScene, bundled};
+pub use error::SceneError;
+pub use file::{ClothBlock, PlaneBlock, SceneFile, SimulationBlock, SphereBlock};
+pub use overrides::apply_set;
+pub use scene::{Scene, load, parse};

@@ -1,0 +1,407 @@
+//! From JSON text to a ready-to-run scene, with every range checked.
+
+use std::path::Path;
+
+use cloth_mesh::{ClothMesh, GridSpec, MeshError, Orientation, Vec3};
+use cloth_solver::{Collider, Plane, SolverKind, Sphere, StepParams};
+use serde_json::Value;
+
+use crate::{SceneError, SceneFile, SimulationBlock, apply_set, bundled};
+
+/// A loaded scene: everything a run needs.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// Where it came from: the bundled name or the file path, as used in messages.
+    pub origin: String,
+    /// The file as parsed (after `--set` overrides), kept so the scene can be saved back.
+    pub file: SceneFile,
+    /// The cloth's topology and start positions.
+    pub mesh: ClothMesh,
+    /// Live parameters at load time.
+    pub params: StepParams,
+    /// Collision objects: the sphere, then the plane, when present.
+    pub colliders: Vec<Collider>,
+    /// The solver the scene asks for.
+    pub solver: SolverKind,
+}
+
+impl Scene {
+    /// The scene's file with `params`, `colliders`' friction and `solver` written into it, so a
+    /// run edited live can be saved and reloaded to the same state.
+    #[must_use]
+    pub fn to_file(
+        &self,
+        params: &StepParams,
+        colliders: &[Collider],
+        solver: SolverKind,
+    ) -> SceneFile {
+        let mut f = self.file.clone();
+        f.cloth.ks = params.ks;
+        f.cloth.density = params.density;
+        f.cloth.damping = params.damping;
+        f.cloth.enable_structural = params.structural;
+        f.cloth.enable_shearing = params.shearing;
+        f.cloth.enable_bending = params.bending;
+        for c in colliders {
+            match c {
+                Collider::Sphere(s) => {
+                    if let Some(b) = f.sphere.as_mut() {
+                        b.friction = s.friction;
+                    }
+                }
+                Collider::Plane(p) => {
+                    if let Some(b) = f.plane.as_mut() {
+                        b.friction = p.friction;
+                    }
+                }
+            }
+        }
+        let defaults = StepParams::default();
+        let mut sim = f.simulation.take().unwrap_or_default();
+        sim.frames_per_sec = Some(params.frames_per_sec);
+        sim.simulation_steps = Some(u64::from(params.steps_per_frame));
+        sim.gravity = Some([params.gravity.x, params.gravity.y, params.gravity.z]);
+        sim.self_collision = Some(params.self_collision);
+        sim.stretch_limit = (params.stretch_limit != defaults.stretch_limit
+            || sim.stretch_limit.is_some())
+        .then_some(params.stretch_limit);
+        sim.solver = Some(solver.name().to_owned());
+        sim.iterations = Some(u64::from(params.iterations));
+        f.simulation = Some(sim);
+        f
+    }
+}
+
+/// Loads a scene by bundled name (`pinned4`) or file path, then applies `sets` overrides.
+///
+/// A path that exists wins over a bundled name; anything ending in `.json` or containing a path
+/// separator is treated as a path.
+///
+/// # Errors
+/// [`SceneError`] naming the file, key, value and what is allowed.
+pub fn load(name_or_path: &str, sets: &[String]) -> Result<Scene, SceneError> {
+    let path = Path::new(name_or_path);
+    let looks_like_path = Path::new(name_or_path)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+        || name_or_path.contains(std::path::MAIN_SEPARATOR)
+        || name_or_path.contains('/');
+    if path.is_file() || (looks_like_path && bundled(name_or_path).is_none()) {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        return parse(&text, name_or_path, sets);
+    }
+    match bundled(name_or_path) {
+        Some(b) => parse(b.json, b.name, sets),
+        None => Err(SceneError::UnknownScene {
+            name: name_or_path.to_owned(),
+            available: crate::BUNDLED
+                .iter()
+                .map(|b| b.name)
+                .collect::<Vec<_>>()
+                .join(", "),
+        }),
+    }
+}
+
+/// Parses scene JSON `text`; `origin` names it in messages.
+///
+/// # Errors
+/// [`SceneError`] naming the origin, key, value and what is allowed.
+pub fn parse(text: &str, origin: &str, sets: &[String]) -> Result<Scene, SceneError> {
+    let file: SceneFile = if sets.is_empty() {
+        // Straight from the text, so type errors keep their line and column.
+        let de = &mut serde_json::Deserializer::from_str(text);
+        serde_path_to_error::deserialize(de).map_err(|e| field_error(origin, e, true))?
+    } else {
+        let mut value: Value = serde_json::from_str(text).map_err(|e| syntax_error(origin, &e))?;
+        for s in sets {
+            apply_set(&mut value, s)?;
+        }
+        serde_path_to_error::deserialize(value).map_err(|e| field_error(origin, e, false))?
+    };
+    build(file, origin)
+}
+
+fn syntax_error(origin: &str, e: &serde_json::Error) -> SceneError {
+    let message = e.to_string();
+    // serde_json appends " at line L column C"; we report those separately.
+    let message = message
+        .split(" at line ")
+        .next()
+        .unwrap_or(&message)
+        .to_owned();
+    SceneError::Syntax {
+        origin: origin.to_owned(),
+        line: e.line(),
+        column: e.column(),
+        message,
+    }
+}
+
+fn field_error(
+    origin: &str,
+    e: serde_path_to_error::Error<serde_json::Error>,
+    located: bool,
+) -> SceneError {
+    let path = e.path().to_string();
+    let inner = e.into_inner();
+    if inner.is_syntax() || inner.is_eof() {
+        return syntax_error(origin, &inner);
+    }
+    let full = inner.to_string();
+    let message = full.split(" at line ").next().unwrap_or(&full).to_owned();
+    SceneError::Field {
+        origin: origin.to_owned(),
+        key: path,
+        message,
+        location: (located && inner.line() > 0).then(|| (inner.line(), inner.column())),
+    }
+}
+
+struct Check<'a> {
+    origin: &'a str,
+}
+
+impl Check<'_> {
+    fn fail(&self, key: &str, value: impl std::fmt::Display, allowed: &str) -> SceneError {
+        SceneError::Invalid {
+            origin: self.origin.to_owned(),
+            key: key.to_owned(),
+            value: value.to_string(),
+            allowed: allowed.to_owned(),
+        }
+    }
+
+    fn range(
+        &self,
+        key: &str,
+        v: f64,
+        ok: impl Fn(f64) -> bool,
+        allowed: &str,
+    ) -> Result<f64, SceneError> {
+        if v.is_finite() && ok(v) {
+            Ok(v)
+        } else {
+            Err(self.fail(key, v, allowed))
+        }
+    }
+
+    fn vec3(&self, key: &str, v: [f64; 3]) -> Result<Vec3, SceneError> {
+        if v.iter().all(|c| c.is_finite()) {
+            Ok(Vec3::new(v[0], v[1], v[2]))
+        } else {
+            Err(self.fail(key, format!("{v:?}"), "three finite numbers"))
+        }
+    }
+}
+
+fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
+    let ck = Check { origin };
+    let c = &file.cloth;
+    let positive = |v: f64| v > 0.0;
+    let unit = |v: f64| (0.0..=1.0).contains(&v);
+    ck.range(
+        "cloth.width",
+        c.width,
+        positive,
+        "a finite number > 0 (metres)",
+    )?;
+    ck.range(
+        "cloth.height",
+        c.height,
+        positive,
+        "a finite number > 0 (metres)",
+    )?;
+    ck.range(
+        "cloth.thickness",
+        c.thickness,
+        positive,
+        "a finite number > 0 (metres)",
+    )?;
+    ck.range("cloth.ks", c.ks, |v| v >= 0.0, "a finite number >= 0 (N/m)")?;
+    ck.range(
+        "cloth.density",
+        c.density,
+        positive,
+        "a finite number > 0 (kg/m^2)",
+    )?;
+    ck.range(
+        "cloth.damping",
+        c.damping,
+        |v| (0.0..=100.0).contains(&v),
+        "between 0 and 100 (percent)",
+    )?;
+    let orientation = match c.orientation {
+        0 => Orientation::Horizontal,
+        1 => Orientation::Vertical,
+        o => return Err(ck.fail("cloth.orientation", o, "0 (horizontal) or 1 (vertical)")),
+    };
+    let grid_rule = format!(
+        "an integer >= 2, with at most {} points in all",
+        cloth_mesh::MAX_POINTS
+    );
+    let count = |key: &str, v: u64| -> Result<usize, SceneError> {
+        if v < 2 || v > cloth_mesh::MAX_POINTS as u64 {
+            Err(ck.fail(key, v, &grid_rule))
+        } else {
+            Ok(v as usize)
+        }
+    };
+    let nw = count("cloth.num_width_points", c.num_width_points)?;
+    let nh = count("cloth.num_height_points", c.num_height_points)?;
+    if nw * nh > cloth_mesh::MAX_POINTS {
+        return Err(ck.fail(
+            "cloth.num_width_points * cloth.num_height_points",
+            nw * nh,
+            &grid_rule,
+        ));
+    }
+    let mut pinned = Vec::new();
+    for (i, &[x, y]) in c.pinned.iter().flatten().enumerate() {
+        if x < 0 || y < 0 || x as u64 >= nw as u64 || y as u64 >= nh as u64 {
+            return Err(ck.fail(
+                &format!("cloth.pinned[{i}]"),
+                format!("[{x}, {y}]"),
+                &format!(
+                    "[column, row] with column in 0..={} and row in 0..={}",
+                    nw - 1,
+                    nh - 1
+                ),
+            ));
+        }
+        pinned.push((x as usize, y as usize));
+    }
+
+    let sim = file.simulation.clone().unwrap_or_default();
+    let SimulationBlock {
+        frames_per_sec,
+        simulation_steps,
+        gravity,
+        self_collision,
+        stretch_limit,
+        solver,
+        iterations,
+        seed,
+    } = sim;
+    let defaults = StepParams::default();
+    let frames_per_sec = match frames_per_sec {
+        Some(f) => ck.range(
+            "simulation.frames_per_sec",
+            f,
+            |v| v > 0.0 && v <= 10_000.0,
+            "a number > 0 and <= 10000",
+        )?,
+        None => defaults.frames_per_sec,
+    };
+    let steps_per_frame = match simulation_steps {
+        Some(s) if (1..=10_000).contains(&s) => s as u32,
+        Some(s) => {
+            return Err(ck.fail(
+                "simulation.simulation_steps",
+                s,
+                "an integer from 1 to 10000",
+            ));
+        }
+        None => defaults.steps_per_frame,
+    };
+    let iterations = match iterations {
+        Some(s) if (1..=1000).contains(&s) => s as u32,
+        Some(s) => return Err(ck.fail("simulation.iterations", s, "an integer from 1 to 1000")),
+        None => defaults.iterations,
+    };
+    let gravity = match gravity {
+        Some(g) => ck.vec3("simulation.gravity", g)?,
+        None => defaults.gravity,
+    };
+    let solver = match solver {
+        Some(name) => name.parse::<SolverKind>().map_err(|_| {
+            ck.fail(
+                "simulation.solver",
+                format!("{name:?}"),
+                "one of \"verlet\", \"implicit\", \"fast-implicit\"",
+            )
+        })?,
+        None => SolverKind::default(),
+    };
+
+    let params = StepParams {
+        ks: c.ks,
+        density: c.density,
+        damping: c.damping,
+        gravity,
+        structural: c.enable_structural,
+        shearing: c.enable_shearing,
+        bending: c.enable_bending,
+        steps_per_frame,
+        frames_per_sec,
+        self_collision: self_collision.unwrap_or(defaults.self_collision),
+        stretch_limit: stretch_limit.unwrap_or(defaults.stretch_limit),
+        iterations,
+    };
+
+    let mut colliders = Vec::new();
+    if let Some(s) = &file.sphere {
+        colliders.push(Collider::Sphere(Sphere {
+            origin: ck.vec3("sphere.origin", s.origin)?,
+            radius: ck.range(
+                "sphere.radius",
+                s.radius,
+                positive,
+                "a finite number > 0 (metres)",
+            )?,
+            friction: ck.range("sphere.friction", s.friction, unit, "between 0 and 1")?,
+        }));
+    }
+    if let Some(p) = &file.plane {
+        let normal = ck.vec3("plane.normal", p.normal)?;
+        let len = normal.norm();
+        if !(len > 0.0 && len.is_finite()) {
+            return Err(ck.fail(
+                "plane.normal",
+                format!("{:?}", p.normal),
+                "a non-zero vector",
+            ));
+        }
+        colliders.push(Collider::Plane(Plane {
+            point: ck.vec3("plane.point", p.point)?,
+            normal: normal / len,
+            friction: ck.range("plane.friction", p.friction, unit, "between 0 and 1")?,
+        }));
+    }
+
+    let spec = GridSpec {
+        width: c.width,
+        height: c.height,
+        num_width_points: nw,
+        num_height_points: nh,
+        thickness: c.thickness,
+        orientation,
+        pinned,
+        seed: seed.unwrap_or(GridSpec::default().seed),
+    };
+    let mesh = ClothMesh::new(&spec).map_err(|e| mesh_error(origin, &e))?;
+    Ok(Scene {
+        origin: origin.to_owned(),
+        file,
+        mesh,
+        params,
+        colliders,
+        solver,
+    })
+}
+
+fn mesh_error(origin: &str, e: &MeshError) -> SceneError {
+    // Everything the mesh checks was checked above with key names; this is a backstop.
+    SceneError::Invalid {
+        origin: origin.to_owned(),
+        key: "cloth".to_owned(),
+        value: e.to_string(),
+        allowed: "a valid grid".to_owned(),
+    }
+}
+
+#[cfg(test)]
+mod tests;

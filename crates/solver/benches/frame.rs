@@ -1,0 +1,179 @@
+//! One 30-step frame of the faithful Verlet solver: the five standard scenes, big grids and
+//! threads. Run with `cargo bench -p cloth-solver --bench frame`.
+//!
+//! Each benchmark first simulates one second (90 frames) so the cloth is hanging, stretched and
+//! in self-contact, then times frames continuing from there; throughput is reported in
+//! particle-steps (points x 30 steps per frame).
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use cloth_mesh::{ClothMesh, ClothState, GridSpec, Orientation, Vec3};
+use cloth_solver::{
+    BenchRun, Collider, ConstraintOrder, Plane, Solver, Sphere, StepParams, Verlet, advance_frame,
+    pinned_grid, time_frames,
+};
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+
+/// The five scenes of the course (spec section 1), built from their definitions.
+fn standard_scenes() -> Vec<(&'static str, ClothMesh, Vec<Collider>)> {
+    let cloth = |orientation, pinned| {
+        ClothMesh::new(&GridSpec {
+            width: 1.0,
+            height: 1.0,
+            num_width_points: 50,
+            num_height_points: 50,
+            thickness: 0.0095,
+            orientation,
+            pinned,
+            ..GridSpec::default()
+        })
+        .unwrap()
+    };
+    let floor = Collider::Plane(Plane {
+        point: Vec3::zeros(),
+        normal: Vec3::y(),
+        friction: 0.5,
+    });
+    let ball = Collider::Sphere(Sphere {
+        origin: Vec3::new(0.5, 0.2, 0.5),
+        radius: 0.2,
+        friction: 0.3,
+    });
+    let h = Orientation::Horizontal;
+    vec![
+        ("pinned2", cloth(h, vec![(0, 0), (49, 0)]), vec![]),
+        (
+            "pinned4",
+            cloth(h, vec![(0, 0), (49, 0), (0, 49), (49, 49)]),
+            vec![],
+        ),
+        ("sphere", cloth(h, vec![]), vec![ball]),
+        ("plane", cloth(h, vec![]), vec![floor]),
+        (
+            "selfCollision",
+            cloth(Orientation::Vertical, vec![]),
+            vec![floor],
+        ),
+    ]
+}
+
+/// Times frames of `solver` on `mesh` after a one-second warm-up.
+fn bench_frames(
+    c: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    id: BenchmarkId,
+    mesh: &ClothMesh,
+    colliders: &[Collider],
+    params: &StepParams,
+    mut solver: Box<dyn Solver>,
+    warmup_frames: u32,
+) {
+    let mut state = ClothState::new(mesh);
+    time_frames(
+        solver.as_mut(),
+        mesh,
+        colliders,
+        params,
+        &mut state,
+        BenchRun {
+            warmup_frames,
+            frames: 0,
+        },
+    )
+    .unwrap();
+    c.throughput(Throughput::Elements(
+        mesh.len() as u64 * u64::from(params.steps_per_frame),
+    ));
+    c.bench_function(id, |b| {
+        b.iter(|| {
+            advance_frame(solver.as_mut(), mesh, colliders, params, &mut state).unwrap();
+            black_box(&state);
+        });
+    });
+}
+
+fn standard(c: &mut Criterion) {
+    let mut g = c.benchmark_group("standard");
+    g.measurement_time(Duration::from_secs(3));
+    for self_collision in [false, true] {
+        let params = StepParams {
+            self_collision,
+            ..StepParams::default()
+        };
+        for (name, mesh, colliders) in standard_scenes() {
+            let id = BenchmarkId::new(
+                name,
+                if self_collision {
+                    "self-on"
+                } else {
+                    "self-off"
+                },
+            );
+            bench_frames(
+                &mut g,
+                id,
+                &mesh,
+                &colliders,
+                &params,
+                Box::new(Verlet::new()),
+                90,
+            );
+        }
+    }
+    g.finish();
+}
+
+fn grids(c: &mut Criterion) {
+    let mut g = c.benchmark_group("grid");
+    g.sample_size(10);
+    g.measurement_time(Duration::from_secs(5));
+    let params = StepParams::default();
+    for n in [64, 128, 256] {
+        let mesh = pinned_grid(n).unwrap();
+        bench_frames(
+            &mut g,
+            BenchmarkId::new("self-on", n),
+            &mesh,
+            &[],
+            &params,
+            Box::new(Verlet::new()),
+            30,
+        );
+    }
+    g.finish();
+}
+
+fn threads(c: &mut Criterion) {
+    let mut g = c.benchmark_group("threads");
+    g.sample_size(10);
+    g.measurement_time(Duration::from_secs(5));
+    let params = StepParams::default();
+    let mesh = pinned_grid(256).unwrap();
+    for order in [ConstraintOrder::Faithful, ConstraintOrder::Parallel] {
+        for threads in [1, 2] {
+            let solver = Verlet::new()
+                .with_order(order)
+                .with_threads(threads)
+                .unwrap();
+            let id = BenchMarkName::id(order, threads);
+            bench_frames(&mut g, id, &mesh, &[], &params, Box::new(solver), 30);
+        }
+    }
+    g.finish();
+}
+
+/// Benchmark names of the thread group: `256/<order>/<threads>`.
+struct BenchMarkName;
+
+impl BenchMarkName {
+    fn id(order: ConstraintOrder, threads: usize) -> BenchmarkId {
+        let order = match order {
+            ConstraintOrder::Faithful => "faithful",
+            ConstraintOrder::Parallel => "parallel",
+        };
+        BenchmarkId::new(format!("256/{order}"), threads)
+    }
+}
+
+criterion_group!(benches, standard, grids, threads);
+criterion_main!(benches);

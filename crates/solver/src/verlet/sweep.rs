@@ -1,0 +1,334 @@
+//! Steps 1 and 2 of the course's step (spring forces, damped Verlet) in one sweep over rows.
+//!
+//! # Why this layout
+//!
+//! The course's springs form a stencil: every point `(x, y)` emits the same six springs, to
+//! `(x + dx, y + dy)` for the six [`DIRECTIONS`]. So instead of walking a list of spring records
+//! (an index gather per end and a scatter of forces, which no compiler vectorises), the sweep
+//! computes one direction for a whole row at a time from contiguous slices: the emitting row and
+//! the partner row shifted by `dx`. The rows are copied into small struct-of-arrays buffers (x,
+//! y and z each contiguous) so those loops run on packed SIMD lanes, square roots and divisions
+//! included; the buffers hold three rows, so they stay in L1/L2 whatever the cloth's size.
+//!
+//! # Same bits as the course's spring loop
+//!
+//! The course adds each spring's force to its two ends in spring order. For point `i` that order
+//! is: gravity, its own six springs in direction order, then the springs it is the far end of,
+//! by emitter index: from `i + 1` (direction 0), `i + 2` (4), `i + nw - 1` (3), `i + nw` (1),
+//! `i + nw + 1` (2) and `i + 2 nw` (5). [`Stencil::sweep`] adds the terms in exactly that order,
+//! so every force, and hence every position, is bit-identical to the straightforward loop. A
+//! spring that does not exist (at an edge) or is disabled contributes `+0.0`, which leaves a sum
+//! unchanged (the only exception, `-0.0 + 0.0`, cannot occur: each sum starts from
+//! `mass * gravity`, and the course's -0.0 gravity would need a negative-zero component).
+//!
+//! # Ping-pong
+//!
+//! The new position of point `i` is written into `last[i]`, the only slot that needed the old
+//! last position, and the caller then swaps the two arrays. The sweep therefore only reads the
+//! old positions, so it has no ordering hazards and rows can be shared out between threads with
+//! the same bits.
+
+use cloth_mesh::{ClothMesh, GridSpec, SpringKind, Vec3};
+
+use crate::SolveError;
+
+/// The six springs a point emits, in the course's emission order: `(dx, dy, kind)`.
+pub(crate) const DIRECTIONS: [(isize, isize, SpringKind); 6] = [
+    (-1, 0, SpringKind::Structural),
+    (0, -1, SpringKind::Structural),
+    (-1, -1, SpringKind::Shearing),
+    (1, -1, SpringKind::Shearing),
+    (-2, 0, SpringKind::Bending),
+    (0, -2, SpringKind::Bending),
+];
+
+/// Zero columns on each side of a row buffer, so a point can read the forces of springs emitted
+/// up to two columns away without bounds tests.
+const PAD: usize = 2;
+
+/// The mesh's springs rearranged by direction; rebuilt only when the mesh changes.
+#[derive(Debug, Clone)]
+pub(crate) struct Stencil {
+    /// The spec the mesh was built from: meshes are a pure function of it, so equal specs mean
+    /// equal springs (cheaper than comparing 14,502 springs every step).
+    spec: GridSpec,
+    nw: usize,
+    nh: usize,
+    /// `rest[t][j]`: rest length of the direction-`t` spring emitted by point `j` (0 where none).
+    rest: [Vec<f64>; 6],
+    /// Pinned point indices.
+    pub(crate) pins: Vec<usize>,
+}
+
+/// The live parameters the sweep needs, derived once per step.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SweepParams {
+    /// Stiffness per direction, N/m (0 when disabled).
+    pub k: [f64; 6],
+    /// `mass * gravity`, N.
+    pub weight: Vec3,
+    /// Verlet's `1 - damping / 100`.
+    pub keep: f64,
+    /// `dt^2 / mass`.
+    pub scale: f64,
+}
+
+/// Per-thread row buffers (three rows of positions and of per-direction forces, and one row of
+/// summed forces), grown once.
+#[derive(Debug, Default, Clone)]
+pub(crate) struct RowScratch {
+    /// `pos[((row % 3) * 3 + c) * stride + PAD + x]`.
+    pos: Vec<f64>,
+    /// `f[(((row % 3) * 6 + t) * 3 + c) * stride + PAD + x]`.
+    f: Vec<f64>,
+    /// Summed force of the row being integrated, `total[c * nw + x]`.
+    total: Vec<f64>,
+}
+
+impl Stencil {
+    /// Rearranges `mesh`'s springs by direction.
+    ///
+    /// # Errors
+    /// [`SolveError::Method`] if the springs are not the course's grid stencil (they always are
+    /// for a [`ClothMesh`]; the check guards the bit-identity argument above).
+    pub(crate) fn new(mesh: &ClothMesh) -> Result<Self, SolveError> {
+        let (nw, nh) = (mesh.nw(), mesh.nh());
+        let n = nw * nh;
+        let mut rest: [Vec<f64>; 6] = Default::default();
+        let mut seen: [Vec<bool>; 6] = Default::default();
+        for t in 0..6 {
+            rest[t] = vec![0.0; n];
+            seen[t] = vec![false; n];
+        }
+        let bad = |what: &str| SolveError::Method {
+            solver: "verlet",
+            reason: format!("the mesh's springs are not the course's grid stencil ({what})"),
+        };
+        for s in mesh.springs() {
+            let (a, b) = (s.a as usize, s.b as usize);
+            let dx = (b % nw) as isize - (a % nw) as isize;
+            let dy = (b / nw) as isize - (a / nw) as isize;
+            let t = DIRECTIONS
+                .iter()
+                .position(|&d| d == (dx, dy, s.kind))
+                .ok_or_else(|| bad("a spring in an unknown direction"))?;
+            if std::mem::replace(&mut seen[t][a], true) {
+                return Err(bad("a duplicate spring"));
+            }
+            rest[t][a] = s.rest;
+        }
+        let expected: usize = DIRECTIONS
+            .iter()
+            .map(|&(dx, dy, _)| valid_columns(nw, dx).len() * nh.saturating_sub((-dy) as usize))
+            .sum();
+        if mesh.springs().len() != expected {
+            return Err(bad("missing springs"));
+        }
+        Ok(Self {
+            spec: mesh.spec().clone(),
+            nw,
+            nh,
+            rest,
+            pins: (0..n).filter(|&i| mesh.pinned()[i]).collect(),
+        })
+    }
+
+    /// Whether this stencil was built for `mesh`.
+    pub(crate) fn matches(&self, mesh: &ClothMesh) -> bool {
+        self.spec == *mesh.spec()
+    }
+
+    /// Points per row.
+    pub(crate) fn nw(&self) -> usize {
+        self.nw
+    }
+
+    /// Rows.
+    pub(crate) fn nh(&self) -> usize {
+        self.nh
+    }
+
+    /// Forces and the damped Verlet update for rows `r0..r1`: reads the old `positions` (all
+    /// rows) and `last` (rows `r0..r1`, in `next`), and writes each new position into `next`
+    /// (pinned points keep theirs).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn sweep(
+        &self,
+        scratch: &mut RowScratch,
+        params: &SweepParams,
+        positions: &[Vec3],
+        pinned: &[bool],
+        next: &mut [Vec3],
+        r0: usize,
+        r1: usize,
+    ) {
+        let (nw, nh) = (self.nw, self.nh);
+        let stride = nw + 2 * PAD;
+        scratch.pos.resize(3 * 3 * stride, 0.0);
+        scratch.f.resize(3 * 6 * 3 * stride, 0.0);
+        scratch.total.resize(3 * nw, 0.0);
+        for y in r0.saturating_sub(2)..r0 {
+            self.load_row(scratch, positions, y);
+        }
+        for y in r0..(r1 + 2) {
+            if y < nh {
+                self.load_row(scratch, positions, y);
+                self.emit_row(scratch, params, y);
+            }
+            if y >= r0 + 2 {
+                let r = y - 2;
+                self.sum_row(scratch, params, r);
+                let row = &mut next[(r - r0) * nw..(r - r0 + 1) * nw];
+                integrate_row(
+                    &scratch.total,
+                    params,
+                    &positions[r * nw..(r + 1) * nw],
+                    &pinned[r * nw..(r + 1) * nw],
+                    row,
+                );
+            }
+        }
+    }
+
+    /// Copies row `y` of `positions` into the struct-of-arrays ring.
+    fn load_row(&self, scratch: &mut RowScratch, positions: &[Vec3], y: usize) {
+        let stride = self.nw + 2 * PAD;
+        let base = (y % 3) * 3 * stride + PAD;
+        let row = &positions[y * self.nw..(y + 1) * self.nw];
+        for c in 0..3 {
+            let dst = &mut scratch.pos[base + c * stride..base + c * stride + self.nw];
+            for (d, p) in dst.iter_mut().zip(row) {
+                *d = p[c];
+            }
+        }
+    }
+
+    /// The force of every spring emitted by row `y`, per direction, into the force ring.
+    fn emit_row(&self, scratch: &mut RowScratch, params: &SweepParams, y: usize) {
+        let (nw, stride) = (self.nw, self.nw + 2 * PAD);
+        for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
+            let out = ((y % 3) * 6 + t) * 3 * stride;
+            let out = &mut scratch.f[out..out + 3 * stride];
+            let cols = valid_columns(nw, dx);
+            let partner_row = y as isize + dy;
+            if params.k[t] == 0.0 || partner_row < 0 || cols.is_empty() {
+                out.fill(0.0);
+                continue;
+            }
+            let (fx, rest_f) = out.split_at_mut(stride);
+            let (fy, fz) = rest_f.split_at_mut(stride);
+            for f in [&mut *fx, &mut *fy, &mut *fz] {
+                f[..PAD + cols.start].fill(0.0);
+                f[PAD + cols.end..].fill(0.0);
+            }
+            let a = (y % 3) * 3 * stride + PAD;
+            let b = (partner_row as usize % 3) * 3 * stride + PAD;
+            let b = (b as isize + dx) as usize;
+            let pos = &scratch.pos;
+            let row = |base: usize, c: usize| &pos[base + c * stride + cols.start..][..cols.len()];
+            let rest = &self.rest[t][y * nw + cols.start..y * nw + cols.end];
+            let span = PAD + cols.start..PAD + cols.end;
+            spring_forces(
+                params.k[t],
+                [row(a, 0), row(a, 1), row(a, 2)],
+                [row(b, 0), row(b, 1), row(b, 2)],
+                rest,
+                [&mut fx[span.clone()], &mut fy[span.clone()], &mut fz[span]],
+            );
+        }
+    }
+
+    /// The total force on each point of row `r`, summed in the course's order (module docs).
+    fn sum_row(&self, scratch: &mut RowScratch, params: &SweepParams, r: usize) {
+        let (nw, stride) = (self.nw, self.nw + 2 * PAD);
+        let f = &scratch.f;
+        // Direction t, component c of emitter row `row`, starting `shift` columns to the right
+        // of each point; rows past the last one emit nothing.
+        let term = |row: usize, t: usize, c: usize, shift: isize| -> &[f64] {
+            if row >= self.nh {
+                return &[];
+            }
+            let start = (((row % 3) * 6 + t) * 3 + c) * stride + PAD;
+            &f[(start as isize + shift) as usize..][..nw]
+        };
+        for c in 0..3 {
+            let total = &mut scratch.total[c * nw..(c + 1) * nw];
+            let [o0, o1, o2, o3, o4, o5] = [0, 1, 2, 3, 4, 5].map(|t| term(r, t, c, 0));
+            let w = params.weight[c];
+            for (x, out) in total.iter_mut().enumerate() {
+                *out = w + o0[x] + o1[x] + o2[x] + o3[x] + o4[x] + o5[x];
+            }
+            let far = [
+                term(r, 0, c, 1),
+                term(r, 4, c, 2),
+                term(r + 1, 3, c, -1),
+                term(r + 1, 1, c, 0),
+                term(r + 1, 2, c, 1),
+                term(r + 2, 5, c, 0),
+            ];
+            // An empty term is a row past the end: no springs, nothing to subtract.
+            for t in far.into_iter().filter(|t| !t.is_empty()) {
+                for (out, v) in total.iter_mut().zip(t) {
+                    *out -= v;
+                }
+            }
+        }
+    }
+}
+
+/// The columns `x` whose direction-`dx` partner `x + dx` lies inside a row of `nw` points.
+fn valid_columns(nw: usize, dx: isize) -> std::ops::Range<usize> {
+    let lo = (-dx).max(0) as usize;
+    let hi = nw.saturating_sub(dx.max(0) as usize);
+    lo..hi.max(lo)
+}
+
+/// Hooke forces `k (|b - a| - rest) (b - a) / |b - a|` on the emitting ends `a`, lane by lane.
+///
+/// NOTE: the operations and their order are the course's (`k * (len - rest) / len`, then times
+/// each component), so the forces are bit-identical; a zero-length spring contributes nothing.
+#[inline]
+fn spring_forces(k: f64, a: [&[f64]; 3], b: [&[f64]; 3], rest: &[f64], f: [&mut [f64]; 3]) {
+    let n = rest.len();
+    let [ax, ay, az] = a.map(|s| &s[..n]);
+    let [bx, by, bz] = b.map(|s| &s[..n]);
+    let [fx, fy, fz] = f;
+    let (fx, fy, fz) = (&mut fx[..n], &mut fy[..n], &mut fz[..n]);
+    for i in 0..n {
+        let (dx, dy, dz) = (bx[i] - ax[i], by[i] - ay[i], bz[i] - az[i]);
+        let len = (dx * dx + dy * dy + dz * dz).sqrt();
+        // NOTE: divide first, then select: a branch here keeps the loop scalar, a select lets
+        // it run on SIMD lanes (the NaN of 0/0 is discarded).
+        let s = k * (len - rest[i]) / len;
+        let s = if len == 0.0 { 0.0 } else { s };
+        fx[i] = dx * s;
+        fy[i] = dy * s;
+        fz[i] = dz * s;
+    }
+}
+
+/// Damped Verlet for one row: `x' = x + keep (x - x_last) + F dt^2 / m`, written over the last
+/// positions in `next`; pinned points keep their position.
+fn integrate_row(
+    total: &[f64],
+    params: &SweepParams,
+    positions: &[Vec3],
+    pinned: &[bool],
+    next: &mut [Vec3],
+) {
+    let nw = positions.len();
+    let (fx, fy, fz) = (&total[..nw], &total[nw..2 * nw], &total[2 * nw..3 * nw]);
+    for (x, ((p, l), &pin)) in positions
+        .iter()
+        .zip(next.iter_mut())
+        .zip(pinned)
+        .enumerate()
+    {
+        let f = Vec3::new(fx[x], fy[x], fz[x]);
+        *l = if pin {
+            *p
+        } else {
+            *p + (*p - *l) * params.keep + f * params.scale
+        };
+    }
+}

@@ -1,0 +1,116 @@
+//! Where everything goes on the screen: one pure function of the model and the terminal size,
+//! used by the view to draw and by the update to hit-test the mouse.
+
+use ratatui::layout::{Constraint, Direction, Layout as Split, Rect};
+
+use super::model::App;
+use super::params::PARAMS;
+
+/// The smallest terminal the layout fits, columns.
+pub const MIN_WIDTH: u16 = 60;
+/// The smallest terminal the layout fits, rows.
+pub const MIN_HEIGHT: u16 = 16;
+
+/// The screen's regions.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Regions {
+    /// Status line at the top.
+    pub title: Rect,
+    /// The cloth panes, with their slot numbers.
+    pub panes: Vec<(usize, Rect)>,
+    /// The parameter panel.
+    pub params: Rect,
+    /// The two plots (kinetic energy, stretch); empty when there is no room.
+    pub plots: [Rect; 2],
+    /// The message line.
+    pub note: Rect,
+    /// The key footer.
+    pub footer: Rect,
+}
+
+/// The regions for `area`, or `None` when it is smaller than [`MIN_WIDTH`] x [`MIN_HEIGHT`].
+pub fn regions(app: &App, area: Rect) -> Option<Regions> {
+    if area.width < MIN_WIDTH || area.height < MIN_HEIGHT {
+        return None;
+    }
+    let rows = Split::vertical([
+        Constraint::Length(1),
+        Constraint::Min(1),
+        Constraint::Length(1),
+        Constraint::Length(1),
+    ])
+    .split(area);
+    let (title, body, note, footer) = (rows[0], rows[1], rows[2], rows[3]);
+
+    let panel_w = if area.width >= 110 { 40 } else { 32 };
+    let cols = Split::horizontal([Constraint::Min(1), Constraint::Length(panel_w)]).split(body);
+    let (mut views, right) = (cols[0], cols[1]);
+
+    // Rows, border and the selected parameter's help (two lines) when there is room.
+    let wanted = PARAMS.len() as u16 + 2;
+    let with_help = wanted + 2;
+    let params_h = if right.height >= with_help + 8 {
+        with_help
+    } else {
+        wanted.min(right.height)
+    };
+    let mut plots = [Rect::default(); 2];
+    let params;
+    if right.height >= params_h + 8 {
+        let r = Split::vertical([Constraint::Length(params_h), Constraint::Min(8)]).split(right);
+        params = r[0];
+        let p = Split::vertical([Constraint::Ratio(1, 2), Constraint::Ratio(1, 2)]).split(r[1]);
+        plots = [p[0], p[1]];
+    } else {
+        params = right;
+        if views.height >= 5 + 8 {
+            let r = Split::vertical([Constraint::Min(8), Constraint::Length(5)]).split(views);
+            views = r[0];
+            let p =
+                Split::horizontal([Constraint::Ratio(1, 2), Constraint::Ratio(1, 2)]).split(r[1]);
+            plots = [p[0], p[1]];
+        }
+    }
+
+    let slots = app.visible_slots();
+    let rects: Vec<Rect> = match slots.len() {
+        1 => vec![views],
+        2 => Split::horizontal([Constraint::Ratio(1, 2), Constraint::Ratio(1, 2)])
+            .split(views)
+            .to_vec(),
+        _ => {
+            let halves =
+                Split::vertical([Constraint::Ratio(1, 2), Constraint::Ratio(1, 2)]).split(views);
+            let mut out = Vec::with_capacity(4);
+            for h in halves.iter() {
+                out.extend(
+                    Split::default()
+                        .direction(Direction::Horizontal)
+                        .constraints([Constraint::Ratio(1, 2), Constraint::Ratio(1, 2)])
+                        .split(*h)
+                        .iter()
+                        .copied(),
+                );
+            }
+            out
+        }
+    };
+    Some(Regions {
+        title,
+        panes: slots.into_iter().zip(rects).collect(),
+        params,
+        plots,
+        note,
+        footer,
+    })
+}
+
+/// The inside of a bordered pane (where the cloth is drawn).
+pub fn inner(r: Rect) -> Rect {
+    Rect {
+        x: r.x.saturating_add(1),
+        y: r.y.saturating_add(1),
+        width: r.width.saturating_sub(2),
+        height: r.height.saturating_sub(2),
+    }
+}

@@ -1,0 +1,450 @@
+//! Tests of the app: `update` driven by the same messages keys produce, and whole-screen
+//! snapshots of the pure view at fixed sizes (no clock anywhere in the view).
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use cloth_mesh::ClothState;
+use cloth_solver::{Verlet, advance_frame};
+use ratatui::Terminal;
+use ratatui::backend::TestBackend;
+use ratatui::crossterm::event::{Event, KeyCode, KeyEvent, KeyModifiers};
+use ratatui::layout::Rect;
+
+use super::model::Overlay;
+use super::params::PARAMS;
+use super::{App, Args, Message, build, input, panes, update, view};
+
+fn app_with(scene: &str, paused: bool) -> App {
+    let args = Args {
+        scene: scene.to_owned(),
+        paused,
+        ..Args::default()
+    };
+    let mut app = build(&args, false).unwrap();
+    app.cwd = PathBuf::from("/nonexistent");
+    app
+}
+
+/// Sends a key through the real input mapping, as the loop does.
+fn press(app: &mut App, code: KeyCode) {
+    let ev = Event::Key(KeyEvent::new(code, KeyModifiers::NONE));
+    if let Some(m) = input::message(app, &ev) {
+        update(app, m);
+    }
+}
+
+fn type_text(app: &mut App, text: &str) {
+    for c in text.chars() {
+        press(app, KeyCode::Char(c));
+    }
+}
+
+fn row(label: &str) -> usize {
+    PARAMS.iter().position(|p| p.label == label).unwrap()
+}
+
+fn select(app: &mut App, label: &str) {
+    while app.selected != row(label) {
+        press(app, KeyCode::Down);
+    }
+}
+
+fn screen(app: &mut App, w: u16, h: u16) -> String {
+    update(
+        app,
+        Message::Resize {
+            width: w,
+            height: h,
+        },
+    );
+    panes::prepare(app, Rect::new(0, 0, w, h));
+    let mut t = Terminal::new(TestBackend::new(w, h)).unwrap();
+    t.draw(|f| view(app, f)).unwrap();
+    t.backend().to_string()
+}
+
+#[test]
+fn nudging_ks_right_raises_it_by_a_log_step_without_a_reset() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Char('n'));
+    let moved = app.sim.state.clone();
+    press(&mut app, KeyCode::Right);
+    // ks is the first row; one fine log step is a factor 2^(1/4).
+    let want = 5000.0 * 2f64.powf(0.25);
+    assert!((app.sim.settings.params.ks - want).abs() < 1e-9);
+    // The edit leaves the cloth where it was and acts on the next step.
+    assert_eq!(app.sim.state, moved);
+    press(&mut app, KeyCode::Char('L'));
+    assert!((app.sim.settings.params.ks - 2.0 * want).abs() < 1e-9);
+    press(&mut app, KeyCode::Char('u'));
+    assert_eq!(app.sim.settings.params.ks, 5000.0);
+}
+
+#[test]
+fn space_and_p_pause_and_a_paused_clock_owes_nothing() {
+    let mut app = app_with("pinned4", false);
+    assert!(app.running);
+    press(&mut app, KeyCode::Char(' '));
+    assert!(!app.running);
+    update(&mut app, Message::Tick(Duration::from_secs(1)));
+    assert_eq!(app.debt, 0.0);
+    press(&mut app, KeyCode::Char('p'));
+    assert!(app.running);
+    update(&mut app, Message::Tick(Duration::from_millis(100)));
+    assert!((app.debt - 0.1).abs() < 1e-12);
+}
+
+#[test]
+fn n_steps_exactly_one_frame_identical_to_the_headless_path() {
+    let mut app = app_with("pinned4", false);
+    press(&mut app, KeyCode::Char('n'));
+    assert!(!app.running, "n pauses");
+    assert_eq!(app.sim.steps, 30);
+    assert_eq!(app.sim.frames, 1);
+    // 30 additions of 1/2700 carry at most 30 roundings of ~1e-19 each.
+    assert!((app.sim.time - 1.0 / 90.0).abs() < 1e-15);
+    let scene = cloth_scene::load("pinned4", &[]).unwrap();
+    let mut state = ClothState::new(&scene.mesh);
+    advance_frame(
+        &mut Verlet::new(),
+        &scene.mesh,
+        &scene.colliders,
+        &scene.params,
+        &mut state,
+    )
+    .unwrap();
+    assert_eq!(app.sim.state, state, "same steps, same bits");
+}
+
+#[test]
+fn reset_restores_the_start_positions_and_keeps_parameters() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Right);
+    let ks = app.sim.settings.params.ks;
+    for _ in 0..3 {
+        press(&mut app, KeyCode::Char('n'));
+    }
+    assert_ne!(
+        app.sim.state.positions,
+        app.sim.scene.mesh.start_positions()
+    );
+    press(&mut app, KeyCode::Char('r'));
+    assert_eq!(
+        app.sim.state.positions,
+        app.sim.scene.mesh.start_positions()
+    );
+    assert_eq!(app.sim.state.last, app.sim.scene.mesh.start_positions());
+    assert_eq!(app.sim.time, 0.0);
+    assert_eq!(app.sim.settings.params.ks, ks);
+}
+
+#[test]
+fn owed_time_is_paid_in_fixed_steps_within_the_budget() {
+    let mut app = app_with("pinned4", false);
+    // One frame of simulated time owed: 30 steps of 1/2700 s (plus half a step of slack so
+    // rounding cannot drop the last one).
+    update(
+        &mut app,
+        Message::Tick(Duration::from_secs_f64(30.5 / 2700.0)),
+    );
+    let mut allowed = 12;
+    let ran = update::run_owed(&mut app, &mut || {
+        allowed -= 1;
+        allowed >= 0
+    });
+    assert_eq!(ran, 12, "the budget stops the steps");
+    let ran = update::run_owed(&mut app, &mut || true);
+    assert_eq!(ran, 18, "the rest of the debt is paid next turn");
+    assert_eq!(app.sim.steps, 30);
+}
+
+#[test]
+fn enter_types_an_exact_value_and_bad_text_is_refused_with_a_reason() {
+    let mut app = app_with("pinned4", true);
+    select(&mut app, "damping");
+    press(&mut app, KeyCode::Enter);
+    assert!(matches!(app.overlay, Overlay::Prompt(_)));
+    for _ in 0..10 {
+        press(&mut app, KeyCode::Backspace);
+    }
+    type_text(&mut app, "abc");
+    press(&mut app, KeyCode::Enter);
+    match &app.overlay {
+        Overlay::Prompt(p) => assert_eq!(
+            p.error.as_deref(),
+            Some("damping: \"abc\" is not a number; enter a number from 0 to 100 %")
+        ),
+        other => panic!("the prompt should stay open, got {other:?}"),
+    }
+    for _ in 0..3 {
+        press(&mut app, KeyCode::Backspace);
+    }
+    type_text(&mut app, "0.5");
+    press(&mut app, KeyCode::Enter);
+    assert_eq!(app.overlay, Overlay::None);
+    assert_eq!(app.sim.settings.params.damping, 0.5);
+}
+
+#[test]
+fn density_is_edited_in_grams_per_square_centimetre() {
+    let mut app = app_with("pinned4", true);
+    select(&mut app, "density");
+    press(&mut app, KeyCode::Enter);
+    for _ in 0..10 {
+        press(&mut app, KeyCode::Backspace);
+    }
+    type_text(&mut app, "20");
+    press(&mut app, KeyCode::Enter);
+    assert_eq!(app.sim.settings.params.density, 200.0);
+}
+
+#[test]
+fn esc_closes_what_is_open_then_quits() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Char('?'));
+    assert_eq!(app.overlay, Overlay::Help);
+    press(&mut app, KeyCode::Esc);
+    assert_eq!(app.overlay, Overlay::None);
+    assert!(!app.quit);
+    press(&mut app, KeyCode::Esc);
+    assert!(app.quit);
+}
+
+#[test]
+fn a_diverging_run_pauses_shows_the_last_good_frame_and_resets() {
+    let mut app = app_with("pinned4", false);
+    select(&mut app, "ks");
+    press(&mut app, KeyCode::Enter);
+    for _ in 0..10 {
+        press(&mut app, KeyCode::Backspace);
+    }
+    type_text(&mut app, "100000000");
+    press(&mut app, KeyCode::Enter);
+    // 1e8 N/m is ~460 times Verlet's limit m/(2 dt^2) = 218,700 N/m for 0.06 kg at 1/2700 s.
+    assert!(app.sim.stability_warning().is_some());
+    update(&mut app, Message::Tick(Duration::from_secs(1)));
+    update::run_owed(&mut app, &mut || true);
+    assert!(!app.running);
+    assert_eq!(app.overlay, Overlay::Fault);
+    assert!(app.sim.fault.is_some());
+    assert!(app.sim.state.first_non_finite().is_none());
+    // Keys other than the recovery keys do not resume a failed run.
+    press(&mut app, KeyCode::Esc);
+    press(&mut app, KeyCode::Char(' '));
+    assert!(!app.running);
+    press(&mut app, KeyCode::Char('U'));
+    press(&mut app, KeyCode::Char('r'));
+    assert!(app.sim.fault.is_none());
+    assert_eq!(app.sim.settings.params.ks, 5000.0);
+}
+
+#[test]
+fn a_solver_that_is_not_built_in_is_refused_with_a_message() {
+    let mut app = app_with("pinned4", true);
+    select(&mut app, "solver");
+    press(&mut app, KeyCode::Right);
+    let built_in = crate::solvers::build(cloth_solver::SolverKind::Implicit).is_ok();
+    if built_in {
+        assert_ne!(app.sim.solver_kind, cloth_solver::SolverKind::Verlet);
+    } else {
+        assert_eq!(app.sim.solver_kind, cloth_solver::SolverKind::Verlet);
+        let note = app.note.clone().unwrap().text;
+        assert!(note.contains("not built into this clothsim"), "{note}");
+    }
+}
+
+#[test]
+fn save_writes_the_edited_scene_and_asks_before_overwriting() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    press(&mut app, KeyCode::Right); // ks up one step
+    press(&mut app, KeyCode::Char('S'));
+    press(&mut app, KeyCode::Enter);
+    let path = dir.path().join("pinned4-edited.json");
+    let saved = cloth_scene::load(&path.to_string_lossy(), &[]).unwrap();
+    assert_eq!(saved.params, app.sim.settings.params);
+    // Again: the file exists, so it asks; "n" goes back to the name, nothing written.
+    press(&mut app, KeyCode::Right);
+    press(&mut app, KeyCode::Char('S'));
+    press(&mut app, KeyCode::Enter);
+    assert!(matches!(app.overlay, Overlay::ConfirmOverwrite(_)));
+    press(&mut app, KeyCode::Char('n'));
+    assert!(matches!(app.overlay, Overlay::Prompt(_)));
+    let unchanged = cloth_scene::load(&path.to_string_lossy(), &[]).unwrap();
+    assert_eq!(unchanged.params, saved.params);
+    press(&mut app, KeyCode::Enter);
+    press(&mut app, KeyCode::Char('y'));
+    let overwritten = cloth_scene::load(&path.to_string_lossy(), &[]).unwrap();
+    assert_eq!(overwritten.params, app.sim.settings.params);
+}
+
+#[test]
+fn the_picker_opens_another_bundled_scene() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Char('o'));
+    let sphere = cloth_scene::BUNDLED
+        .iter()
+        .position(|s| s.name == "sphere")
+        .unwrap();
+    for _ in 0..sphere {
+        press(&mut app, KeyCode::Down);
+    }
+    press(&mut app, KeyCode::Enter);
+    assert_eq!(app.sim.scene.origin, "sphere");
+    assert_eq!(app.overlay, Overlay::None);
+}
+
+#[test]
+fn layout_cycles_and_the_focused_pane_maximises() {
+    let mut app = app_with("pinned4", true);
+    assert_eq!(app.visible_slots(), vec![0, 1]);
+    press(&mut app, KeyCode::Char('v'));
+    assert_eq!(app.visible_slots(), vec![0, 1, 2, 3]);
+    press(&mut app, KeyCode::Tab);
+    press(&mut app, KeyCode::Char('f'));
+    assert_eq!(app.visible_slots(), vec![1]);
+    press(&mut app, KeyCode::Char('v'));
+    assert_eq!(
+        app.visible_slots(),
+        vec![1],
+        "single layout shows the focused pane"
+    );
+}
+
+#[test]
+fn snapshot_start_up() {
+    let mut app = app_with("pinned4", false);
+    insta::assert_snapshot!("start_up_80x24", screen(&mut app, 80, 24));
+    let mut app = app_with("pinned4", false);
+    insta::assert_snapshot!("start_up_140x44", screen(&mut app, 140, 44));
+}
+
+#[test]
+fn snapshot_help_overlay() {
+    let mut app = app_with("pinned4", false);
+    press(&mut app, KeyCode::Char('?'));
+    insta::assert_snapshot!("help_120x40", screen(&mut app, 120, 40));
+}
+
+#[test]
+fn snapshot_editing_a_parameter() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Enter);
+    type_text(&mut app, "x");
+    press(&mut app, KeyCode::Enter);
+    insta::assert_snapshot!("editing_ks_100x30", screen(&mut app, 100, 30));
+}
+
+#[test]
+fn snapshot_divergence() {
+    let mut app = app_with("pinned4", false);
+    update(&mut app, Message::Tick(Duration::from_secs_f64(0.1)));
+    update::run_owed(&mut app, &mut || true);
+    select(&mut app, "ks");
+    press(&mut app, KeyCode::Char('L'));
+    for _ in 0..10 {
+        press(&mut app, KeyCode::Char('L'));
+    }
+    update(&mut app, Message::Tick(Duration::from_secs(1)));
+    update::run_owed(&mut app, &mut || true);
+    assert_eq!(app.overlay, Overlay::Fault);
+    insta::assert_snapshot!("divergence_100x30", screen(&mut app, 100, 30));
+}
+
+#[test]
+fn snapshot_too_small_then_recovers() {
+    let mut app = app_with("pinned4", false);
+    insta::assert_snapshot!("too_small_50x12", screen(&mut app, 50, 12));
+    let big = screen(&mut app, 80, 24);
+    assert!(big.contains("parameters"));
+}
+
+#[test]
+fn dragging_in_an_orbit_pane_turns_the_camera_and_the_wheel_zooms() {
+    let mut app = app_with("pinned4", true);
+    update(
+        &mut app,
+        Message::Resize {
+            width: 120,
+            height: 40,
+        },
+    );
+    app.views[1] = cloth_render::View::Orbit;
+    let (yaw, distance) = (app.orbit.yaw, app.orbit.distance);
+    // Pane 2 is the right half of the view area (left of the 40-column panel).
+    let (col, row) = (60, 10);
+    update(&mut app, Message::MouseDown { col, row });
+    update(&mut app, Message::MouseDrag { col: col + 10, row });
+    update(&mut app, Message::MouseUp);
+    // 10 cells at 0.05 rad per cell.
+    assert!((app.orbit.yaw - (yaw + 0.5)).abs() < 1e-12);
+    update(&mut app, Message::Wheel { col, row, dir: -1 });
+    assert!((app.orbit.distance - distance * super::keymap::ZOOM).abs() < 1e-12);
+    // The same gesture over a fixed view (pane 1) does nothing to the camera.
+    update(&mut app, Message::MouseDown { col: 5, row });
+    update(&mut app, Message::MouseDrag { col: 15, row });
+    assert!((app.orbit.yaw - (yaw + 0.5)).abs() < 1e-12);
+}
+
+#[test]
+fn the_picker_lists_and_opens_scene_files_of_the_working_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("mine.json"),
+        cloth_scene::bundled("sphere").unwrap().json,
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("notes.txt"), "not a scene").unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    press(&mut app, KeyCode::Char('o'));
+    match &app.overlay {
+        Overlay::Picker(p) => assert_eq!(p.files, vec!["mine.json".to_owned()]),
+        other => panic!("expected the picker, got {other:?}"),
+    }
+    for _ in 0..cloth_scene::BUNDLED.len() {
+        press(&mut app, KeyCode::Down);
+    }
+    press(&mut app, KeyCode::Enter);
+    assert!(
+        app.sim.scene.origin.ends_with("mine.json"),
+        "{}",
+        app.sim.scene.origin
+    );
+    assert_eq!(
+        app.sim.settings.colliders.len(),
+        1,
+        "the sphere came with it"
+    );
+}
+
+#[test]
+fn without_colour_nothing_on_screen_is_coloured() {
+    use ratatui::style::Color;
+    let draw = |app: &mut App| {
+        update(
+            app,
+            Message::Resize {
+                width: 100,
+                height: 30,
+            },
+        );
+        panes::prepare(app, Rect::new(0, 0, 100, 30));
+        let mut t = Terminal::new(TestBackend::new(100, 30)).unwrap();
+        t.draw(|f| view(app, f)).unwrap();
+        t.backend()
+            .buffer()
+            .content()
+            .iter()
+            .any(|c| c.fg != Color::Reset || c.bg != Color::Reset)
+    };
+    // Off a terminal (or under NO_COLOR, or --color never) colour resolves to none.
+    let mut app = app_with("pinned4", true);
+    assert!(!app.color && !app.color_allowed);
+    assert!(!draw(&mut app), "no cell may carry a colour");
+    // The same screen with colour allowed does use it (so the check above can fail).
+    app.color_allowed = true;
+    assert!(draw(&mut app));
+}

@@ -1,0 +1,115 @@
+//! The status line, the message line and the key footer.
+
+use ratatui::Frame;
+use ratatui::layout::Rect;
+use ratatui::text::{Line, Span};
+use ratatui::widgets::Paragraph;
+
+use crate::app::keymap::KEYMAP;
+use crate::app::model::{App, Level};
+use crate::app::theme::Theme;
+
+/// `clothsim  pinned4  verlet  RUNNING 1x  t 1.234 s  rtf 1.00  2700 steps/s  30 fps`
+pub fn title(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
+    let sim = &app.sim;
+    let (state, style) = if sim.fault.is_some() {
+        ("STOPPED", theme.error)
+    } else if app.running {
+        ("RUNNING", theme.running)
+    } else {
+        ("PAUSED", theme.paused)
+    };
+    let rate = app.rate();
+    let rate = if rate >= 1.0 {
+        format!("{rate}x")
+    } else {
+        format!("1/{}x", (1.0 / rate).round())
+    };
+    let s = &app.stats;
+    // (priority, span): when the line is too wide, the lowest priorities go first.
+    let mut fields = vec![
+        (2, Span::styled(" clothsim ", theme.key)),
+        (
+            8,
+            Span::styled(format!(" {} ", sim.scene.origin), theme.text),
+        ),
+        (4, Span::styled(format!(" {} ", sim.solver_kind), theme.dim)),
+        (10, Span::styled(format!(" {state}"), style)),
+        (10, Span::styled(format!(" {rate} "), theme.text)),
+        (
+            9,
+            Span::styled(format!(" t {:.3} s ", sim.time), theme.text),
+        ),
+        (
+            7,
+            Span::styled(
+                format!(
+                    " rtf {:.2}{} ",
+                    s.realtime_factor,
+                    if s.lagging { " lagging" } else { "" }
+                ),
+                if s.lagging { theme.warn } else { theme.text },
+            ),
+        ),
+        (
+            5,
+            Span::styled(format!(" {:.0} steps/s ", s.steps_per_sec), theme.dim),
+        ),
+        (
+            6,
+            Span::styled(format!(" {:.0} fps ", s.draws_per_sec), theme.dim),
+        ),
+    ];
+    if s.draw_ms > 0.0 {
+        fields.push((
+            1,
+            Span::styled(
+                format!(
+                    " draw {:.1} ms, sim budget {:.1} ms ",
+                    s.draw_ms, s.budget_ms
+                ),
+                theme.dim,
+            ),
+        ));
+    }
+    let width = |f: &[(i32, Span)]| f.iter().map(|(_, s)| s.width()).sum::<usize>();
+    while fields.len() > 2 && width(&fields) > area.width as usize {
+        if let Some(k) = (0..fields.len()).min_by_key(|&k| fields[k].0) {
+            fields.remove(k);
+        }
+    }
+    let spans: Vec<Span> = fields.into_iter().map(|(_, s)| s).collect();
+    f.render_widget(Paragraph::new(Line::from(spans)), area);
+}
+
+/// The latest note, styled by level.
+pub fn note(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
+    let Some(n) = &app.note else {
+        return;
+    };
+    let (mark, style) = match n.level {
+        Level::Info => ("", theme.info),
+        Level::Warn => ("! ", theme.warn),
+        Level::Error => ("error: ", theme.error),
+    };
+    f.render_widget(
+        Paragraph::new(Line::styled(format!(" {mark}{}", n.text), style)),
+        area,
+    );
+}
+
+/// The footer, from the keymap: as many bindings as fit.
+pub fn footer(f: &mut Frame, area: Rect, theme: &Theme) {
+    let mut spans = vec![Span::raw(" ")];
+    let mut width = 1;
+    for (keys, word) in KEYMAP.iter().filter_map(|b| b.footer) {
+        let w = keys.chars().count() + word.len() + 3;
+        if width + w > area.width as usize {
+            break;
+        }
+        width += w;
+        spans.push(Span::styled(keys, theme.key));
+        spans.push(Span::styled(format!(" {word}  "), theme.dim));
+    }
+    f.render_widget(Paragraph::new(Line::from(spans)), area);
+}

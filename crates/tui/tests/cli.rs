@@ -1,0 +1,265 @@
+//! The `clothsim` binary's headless commands, run as a user would run them.
+
+use std::process::{Command, Output};
+
+fn clothsim(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_clothsim"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn scenes_lists_every_bundled_scene_with_a_description() {
+    let o = clothsim(&["scenes"]);
+    assert!(o.status.success());
+    let out = String::from_utf8(o.stdout).unwrap();
+    for b in cloth_scene::BUNDLED {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(b.name))
+            .unwrap_or_else(|| panic!("{} listed", b.name));
+        assert!(line.contains(b.description));
+    }
+}
+
+#[test]
+fn simulate_writes_the_final_state_as_json() {
+    let o = clothsim(&["simulate", "pinned4", "--frames", "3"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["num_width_points"], 50);
+    assert_eq!(v["num_height_points"], 50);
+    assert_eq!(v["frames"], 3);
+    assert!((v["time"].as_f64().unwrap() - 3.0 / 90.0).abs() < 1e-15);
+    let positions = v["positions"].as_array().unwrap();
+    assert_eq!(positions.len(), 2500);
+    // Pinned corner (0, 0) stays at its start; full precision means the text round-trips.
+    assert_eq!(positions[0], serde_json::json!([0.0, 1.0, 0.0]));
+    assert!(
+        stderr(&o).is_empty(),
+        "no progress bar when stderr is not a terminal"
+    );
+}
+
+#[test]
+fn simulate_matches_the_library_bit_for_bit() {
+    let o = clothsim(&[
+        "simulate",
+        "sphere",
+        "--frames",
+        "2",
+        "--set",
+        "cloth.ks=8000",
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let scene = cloth_scene::load("sphere", &["cloth.ks=8000".to_owned()]).unwrap();
+    let mut state = cloth_mesh::ClothState::new(&scene.mesh);
+    let mut solver = cloth_solver::Verlet::new();
+    for _ in 0..2 {
+        cloth_solver::advance_frame(
+            &mut solver,
+            &scene.mesh,
+            &scene.colliders,
+            &scene.params,
+            &mut state,
+        )
+        .unwrap();
+    }
+    for (p, q) in state
+        .positions
+        .iter()
+        .zip(v["positions"].as_array().unwrap())
+    {
+        for k in 0..3 {
+            assert_eq!(p[k].to_bits(), q[k].as_f64().unwrap().to_bits());
+        }
+    }
+}
+
+#[test]
+fn simulate_writes_obj_and_json_files_atomically() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("cloth.obj");
+    let o = clothsim(&[
+        "simulate",
+        "plane",
+        "--frames",
+        "1",
+        "--out",
+        obj.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert_eq!(text.lines().filter(|l| l.starts_with("v ")).count(), 2500);
+    assert_eq!(text.lines().filter(|l| l.starts_with("vn ")).count(), 2500);
+    assert_eq!(
+        text.lines().filter(|l| l.starts_with("f ")).count(),
+        2 * 49 * 49
+    );
+    assert!(
+        text.contains("\nf 1//1 51//51 2//2\n"),
+        "first triangle is (A, C, B), 1-based"
+    );
+    // Only the result is left in the folder: the temporary file was renamed into place.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}
+
+#[test]
+fn a_failed_run_leaves_an_existing_file_untouched() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("state.json");
+    std::fs::write(&out, "precious").unwrap();
+    let o = clothsim(&[
+        "simulate",
+        "pinned4",
+        "--frames",
+        "30",
+        "--set",
+        "cloth.ks=1e9",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("diverged"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "precious");
+}
+
+#[test]
+fn bad_input_is_one_clear_message_and_a_non_zero_exit() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.json");
+    std::fs::write(&bad, "{\n  \"cloth\": {\n    \"width\": 1,,\n  }\n}\n").unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec!["simulate".into(), bad.to_str().unwrap().into()],
+            "invalid JSON at line 3, column 16",
+        ),
+        (
+            vec![
+                "simulate".into(),
+                "pinned4".into(),
+                "--set".into(),
+                "cloth.ks=-1".into(),
+            ],
+            "cloth.ks is -1",
+        ),
+        (
+            vec![
+                "simulate".into(),
+                "pinned4".into(),
+                "--set".into(),
+                "cloth.kss=1".into(),
+            ],
+            "unknown field `kss`",
+        ),
+        (
+            vec!["simulate".into(), "nosuchscene".into()],
+            "no scene file or bundled scene named",
+        ),
+        (
+            vec![
+                "simulate".into(),
+                "pinned4".into(),
+                "--out".into(),
+                "x.txt".into(),
+            ],
+            "must end in .json or .obj",
+        ),
+        (
+            vec![
+                "simulate".into(),
+                "pinned4".into(),
+                "--frames".into(),
+                "many".into(),
+            ],
+            "invalid value 'many'",
+        ),
+        (
+            vec![
+                "simulate".into(),
+                "pinned4".into(),
+                "--solver".into(),
+                "rk4".into(),
+            ],
+            "unknown solver",
+        ),
+    ];
+    for (args, expected) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = clothsim(&args);
+        assert!(!o.status.success(), "{args:?}");
+        let e = stderr(&o);
+        assert!(e.contains(expected), "{args:?}: {e}");
+        assert!(!e.contains("panicked"), "{e}");
+    }
+}
+
+#[test]
+fn render_prints_frames_of_exactly_h_lines_of_w_columns_separated_by_form_feeds() {
+    // --frames 6 --every 2 prints frames 2, 4 and 6: three frames, two separators.
+    let o = clothsim(&[
+        "render", "pinned4", "--frames", "6", "--every", "2", "--size", "30x12",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let frames: Vec<&str> = out.split("\x0c\n").collect();
+    assert_eq!(frames.len(), 3);
+    for f in frames {
+        assert_eq!(f.lines().count(), 12);
+        assert!(f.lines().all(|l| l.chars().count() == 30), "{f}");
+        assert!(!f.contains('\x1b'), "plain text has no escapes");
+        assert!(f.contains('O'), "the pins are marked");
+    }
+}
+
+#[test]
+fn render_all_views_are_labelled_side_by_side_and_ansi_has_colour() {
+    let o = clothsim(&[
+        "render", "sphere", "--frames", "2", "--view", "all", "--size", "20x8",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let lines: Vec<&str> = out.lines().collect();
+    // A label line, then 8 rows of three 20-column panels joined by " | ".
+    assert_eq!(lines.len(), 9);
+    assert!(
+        lines[0].starts_with("side") && lines[0].contains("| top") && lines[0].contains("| front")
+    );
+    assert!(
+        lines[1..]
+            .iter()
+            .all(|l| l.chars().count() == 3 * 20 + 2 * 3)
+    );
+    let o = clothsim(&[
+        "render", "pinned4", "--frames", "1", "--format", "ansi", "--color", "256", "--size",
+        "20x8",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8(o.stdout).unwrap().contains("\x1b[38;5;"));
+}
+
+#[test]
+fn render_rejects_bad_sizes_and_views_with_clear_messages() {
+    for (args, message) in [
+        (["--size", "0x40"], "zero dimension"),
+        (["--size", "4x2"], "too small"),
+        (["--size", "100000x40"], "too large"),
+        (["--size", "big"], "WIDTHxHEIGHT"),
+        (
+            ["--view", "diagonal"],
+            "expected side, top, bottom, front, orbit or all",
+        ),
+        (["--mode", "sixel"], "expected ascii, half or braille"),
+    ] {
+        let mut all = vec!["render", "pinned4", "--frames", "0"];
+        all.extend(args);
+        let o = clothsim(&all);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(stderr(&o).contains(message), "{args:?}: {}", stderr(&o));
+    }
+}
