@@ -67,8 +67,10 @@ fn assert_hangs_as_a_chain(mesh: &ClothMesh, state: &ClothState, p: &StepParams,
 fn a_hanging_spring_stretches_by_m_g_over_k() {
     // One spring per column, a 37.5 kg point below it: stretch m g / k = 367.5 / 1e5 m.
     // The rest state is the exact root of grad E = 0 up to the settle criterion (1e-12 m per
-    // step, shrinking by about a half per step, so < 1e-11 m left) and rounding of 1 m
-    // coordinates (1e-16 m times the condition number k / (m g / L) ~ 300): 1e-9 m is ample.
+    // step) and rounding of 1 m coordinates (1e-16 m times the condition number
+    // k / (m g / L) ~ 300). The stretch itself is checked to 1e-9 m; the position to 1e-8 m,
+    // because the fast solver's ten local/global iterations close in on the pendulum's rest
+    // angle (the soft direction) only slowly, leaving ~1e-9 m when a step moves < 1e-12 m.
     let mesh = ladder(2);
     let p = params(1e5);
     for solver in [
@@ -83,7 +85,7 @@ fn a_hanging_spring_stretches_by_m_g_over_k() {
             "{}: stretch {stretch} vs m g / k = {expected}",
             solver.name()
         );
-        assert_hangs_as_a_chain(&mesh, &state, &p, 1e-9);
+        assert_hangs_as_a_chain(&mesh, &state, &p, 1e-8);
     }
 }
 
