@@ -31,9 +31,17 @@ pub(crate) fn limit_stretch_from(
     }
 }
 
-/// The course's correction of one spring from `a` to `b`.
+/// The course's correction of one spring from `a` to `b`; true when it was over the limit (and
+/// so may have moved its ends).
 #[inline]
-fn limit_one(a: usize, b: usize, rest: f64, pinned: &[bool], positions: &mut [Vec3], ratio: f64) {
+pub(crate) fn limit_one(
+    a: usize,
+    b: usize,
+    rest: f64,
+    pinned: &[bool],
+    positions: &mut [Vec3],
+    ratio: f64,
+) -> bool {
     let d = positions[b] - positions[a];
     let len2 = dist2(&d);
     let max = ratio * rest;
@@ -41,12 +49,12 @@ fn limit_one(a: usize, b: usize, rest: f64, pinned: &[bool], positions: &mut [Ve
     // square root. It is exact: the computed bound is at most the real max^2 (its rounding is
     // within the 4-ulp margin), so the real length is <= max, and so is the correctly rounded
     // sqrt, because `max` is representable and rounding is monotone.
-    if len2 <= max * max * (1.0 - 4.0 * f64::EPSILON) {
-        return;
+    if len2 <= inside_bound(max) {
+        return false;
     }
     let len = len2.sqrt();
     if len <= max {
-        return;
+        return false;
     }
     let excess = d * ((len - max) / len);
     match (pinned[a], pinned[b]) {
@@ -59,6 +67,17 @@ fn limit_one(a: usize, b: usize, rest: f64, pinned: &[bool], positions: &mut [Ve
             positions[b] -= half;
         }
     }
+    true
+}
+
+/// Squared lengths up to this bound are certainly within `max` (see [`limit_one`]).
+///
+/// NOTE: one definition for the sequential check and the vectorised pre-pass of the Verlet
+/// solver's sweep: both must make the same decision for the same positions, bit for bit.
+#[inline(always)]
+#[allow(clippy::inline_always)]
+pub(crate) fn inside_bound(max: f64) -> f64 {
+    max * max * (1.0 - 4.0 * f64::EPSILON)
 }
 
 /// The stretch limit's sweep cut into row bands that threads can share

@@ -26,6 +26,7 @@
 //! default) steps 3 and 5 keep the course's sequential order; [`ConstraintOrder::Parallel`]
 //! trades that order for threads.
 
+mod limit;
 mod sweep;
 
 use std::sync::Arc;
@@ -39,6 +40,7 @@ use crate::{
     Collider, SolveError, Solver, SpatialHash, StepParams, StepReport, apply_colliders,
     limit_stretch,
 };
+use limit::StretchSweep;
 use sweep::{RowScratch, Stencil, SweepParams};
 
 /// The order in which the two sequential constraint passes (self-collision and the stretch
@@ -76,6 +78,8 @@ pub struct Verlet {
     bands: StretchBands,
     /// Positions at the start of the parallel self-collision pass.
     snapshot: Vec<Vec3>,
+    /// Scratch of the faithful stretch-limit sweep.
+    stretch: StretchSweep,
 }
 
 impl Verlet {
@@ -240,6 +244,9 @@ impl Solver for Verlet {
                 let (springs, pinned) = (mesh.springs(), mesh.pinned());
                 self.bands
                     .limit(springs, pinned, positions, MAX_STRETCH, pool);
+            } else if let Some(stencil) = &self.stencil {
+                self.stretch
+                    .limit(stencil, mesh.pinned(), positions, MAX_STRETCH);
             } else {
                 limit_stretch(mesh.springs(), mesh.pinned(), positions, MAX_STRETCH);
             }

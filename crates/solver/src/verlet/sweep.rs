@@ -153,6 +153,11 @@ impl Stencil {
         self.nh
     }
 
+    /// Rest lengths of the direction-`t` springs by emitting point (0 where none).
+    pub(crate) fn rest(&self, t: usize) -> &[f64] {
+        &self.rest[t]
+    }
+
     /// Forces and the damped Verlet update for rows `r0..r1`: reads the old `positions` (all
     /// rows) and `last` (rows `r0..r1`, in `next`), and writes each new position into `next`
     /// (pinned points keep theirs).
@@ -339,7 +344,7 @@ impl Stencil {
 }
 
 /// The columns `x` whose direction-`dx` partner `x + dx` lies inside a row of `nw` points.
-fn valid_columns(nw: usize, dx: isize) -> std::ops::Range<usize> {
+pub(crate) fn valid_columns(nw: usize, dx: isize) -> std::ops::Range<usize> {
     let lo = (-dx).max(0) as usize;
     let hi = nw.saturating_sub(dx.max(0) as usize);
     lo..hi.max(lo)

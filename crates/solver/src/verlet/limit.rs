@@ -1,0 +1,218 @@
+//! The course's stretch-limit sweep (step 5), with the springs that provably need nothing
+//! skipped.
+//!
+//! # Why
+//!
+//! The course sweeps every spring in order, in place: later springs see earlier corrections.
+//! In a moving cloth only a few springs per sweep are over the limit, yet checking each one is a
+//! dependent chain of loads, a squared length and a branch, one spring at a time; that made the
+//! sweep a third of a step.
+//!
+//! # How, and why the result is the course's bit for bit
+//!
+//! 1. A pre-pass computes the squared length of every spring from the positions at the start of
+//!    the sweep, row by row and direction by direction on struct-of-arrays copies (so it runs on
+//!    SIMD lanes), and marks the springs not proven inside the limit.
+//! 2. The sequential sweep walks the springs in the course's order (point by point, the six
+//!    directions in order, exactly the spring list's order) and runs the course's check on a
+//!    spring only when it is marked or one of its ends has moved since the sweep began.
+//!
+//! A skipped spring has both ends at their start positions, so the course's check would compute
+//! the very squared length of the pre-pass (same operands, same operations: [`limit_one`] and
+//! the pre-pass share [`inside_bound`]) and skip it too. Every other spring gets the course's
+//! check on the current positions. So the sweep makes the same corrections in the same order.
+
+// NOTE: the pre-pass helpers are `#[inline(always)]` so they are compiled into its AVX2 build.
+#![allow(clippy::inline_always)]
+
+use cloth_mesh::Vec3;
+
+use super::sweep::{DIRECTIONS, Stencil, valid_columns};
+use crate::stretch::{inside_bound, limit_one};
+
+/// Scratch memory of the sweep; grows once per mesh.
+#[derive(Debug, Default, Clone)]
+pub(crate) struct StretchSweep {
+    /// Struct-of-arrays copy of the positions at the start of the sweep.
+    soa: [Vec<f64>; 3],
+    /// Per point: bit `t` set when its direction-`t` spring exists and is not proven inside.
+    check: Vec<u8>,
+    /// Per point: bit `t` set when its direction-`t` spring exists.
+    exists: Vec<u8>,
+    /// `moved[MARGIN + i]`: point `i` moved during this sweep. The margin lets the sweep read
+    /// the flags of the partners of points in the first two rows without bounds tests.
+    moved: Vec<bool>,
+}
+
+impl StretchSweep {
+    /// One sweep of the stretch limit over all of `stencil`'s springs, in the course's order.
+    pub(crate) fn limit(
+        &mut self,
+        stencil: &Stencil,
+        pinned: &[bool],
+        positions: &mut [Vec3],
+        ratio: f64,
+    ) {
+        let (nw, nh) = (stencil.nw(), stencil.nh());
+        let n = nw * nh;
+        let margin = 2 * nw + 1;
+        if self.exists.len() != n {
+            self.exists.clear();
+            self.exists
+                .extend((0..n).map(|i| exists_mask(nw, i % nw, i / nw)));
+        }
+        self.check.resize(n, 0);
+        self.moved.clear();
+        self.moved.resize(margin + n, false);
+        self.prepass(stencil, positions, ratio);
+
+        let offsets = DIRECTIONS.map(|(dx, dy, _)| dx + dy * nw as isize);
+        let moved = &mut self.moved;
+        for (j, (&check, &exists)) in self.check.iter().zip(&self.exists).enumerate() {
+            // Springs to look at: marked by the pre-pass, or with a partner that moved. The
+            // emitter itself cannot have moved yet: earlier springs only touch earlier points.
+            let mut look = check;
+            for (t, &off) in offsets.iter().enumerate() {
+                look |= u8::from(moved[(margin + j).wrapping_add_signed(off)]) << t;
+            }
+            look &= exists;
+            if look == 0 {
+                continue;
+            }
+            let mut emitter_moved = false;
+            for (t, &off) in offsets.iter().enumerate() {
+                // NOTE: once the emitter has moved, each of its later springs needs the check.
+                let bit = 1u8 << t;
+                if exists & bit == 0 || (look & bit == 0 && !emitter_moved) {
+                    continue;
+                }
+                let b = j.wrapping_add_signed(off);
+                if limit_one(j, b, stencil.rest(t)[j], pinned, positions, ratio) {
+                    emitter_moved = true;
+                    moved[margin + j] = true;
+                    moved[margin + b] = true;
+                }
+            }
+        }
+    }
+
+    /// Marks the springs not proven inside the limit from the current positions.
+    fn prepass(&mut self, stencil: &Stencil, positions: &[Vec3], ratio: f64) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, checked just above.
+            #[allow(unsafe_code)]
+            unsafe {
+                self.prepass_avx2(stencil, positions, ratio);
+            }
+            return;
+        }
+        self.prepass_portable(stencil, positions, ratio);
+    }
+
+    /// The pre-pass compiled for AVX2 (same operations, four lanes; see `Stencil::sweep_avx2`).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[allow(unsafe_code)]
+    #[target_feature(enable = "avx2")]
+    unsafe fn prepass_avx2(&mut self, stencil: &Stencil, positions: &[Vec3], ratio: f64) {
+        self.prepass_portable(stencil, positions, ratio);
+    }
+
+    #[inline(always)]
+    fn prepass_portable(&mut self, stencil: &Stencil, positions: &[Vec3], ratio: f64) {
+        let (nw, nh) = (stencil.nw(), stencil.nh());
+        for (c, soa) in self.soa.iter_mut().enumerate() {
+            soa.clear();
+            soa.extend(positions.iter().map(|p| p[c]));
+        }
+        let [px, py, pz] = &self.soa;
+        for y in 0..nh {
+            let row = &mut self.check[y * nw..(y + 1) * nw];
+            row.fill(0);
+            for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
+                let cols = valid_columns(nw, dx);
+                if y < (-dy) as usize || cols.is_empty() {
+                    continue;
+                }
+                let a = y * nw + cols.start;
+                let b = a.wrapping_add_signed(dx + dy * nw as isize);
+                let len = cols.len();
+                let rest = &stencil.rest(t)[a..a + len];
+                let (ax, ay, az) = (&px[a..a + len], &py[a..a + len], &pz[a..a + len]);
+                let (bx, by, bz) = (&px[b..b + len], &py[b..b + len], &pz[b..b + len]);
+                let out = &mut row[cols];
+                for i in 0..len {
+                    // NOTE: the course's `positions[b] - positions[a]` and `dist2`, operand for
+                    // operand, so the decision is the sequential check's.
+                    let (ddx, ddy, ddz) = (bx[i] - ax[i], by[i] - ay[i], bz[i] - az[i]);
+                    let len2 = ddx * ddx + ddy * ddy + ddz * ddz;
+                    let inside = len2 <= inside_bound(ratio * rest[i]);
+                    out[i] |= u8::from(!inside) << t;
+                }
+            }
+        }
+    }
+}
+
+/// Bit `t` set when point `(x, y)` of a grid `nw` wide emits a direction-`t` spring.
+fn exists_mask(nw: usize, x: usize, y: usize) -> u8 {
+    let mut mask = 0;
+    for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
+        if valid_columns(nw, dx).contains(&x) && y >= (-dy) as usize {
+            mask |= 1 << t;
+        }
+    }
+    mask
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{MAX_STRETCH, limit_stretch, pinned_grid};
+
+    #[test]
+    fn the_sweep_makes_the_courses_corrections_bit_for_bit() {
+        // Points scattered by up to 40 % of the spacing: many springs over the limit, chains of
+        // corrections through shared points, pinned corners, and ragged rows (37 wide).
+        let mesh = pinned_grid(37).unwrap();
+        let stencil = Stencil::new(&mesh).unwrap();
+        let mut rng = cloth_mesh::SplitMix64::new(3);
+        let h = 0.4 / 49.0;
+        let start: Vec<Vec3> = mesh
+            .start_positions()
+            .iter()
+            .map(|p| p + Vec3::new(rng.uniform(-h, h), rng.uniform(-h, h), rng.uniform(-h, h)))
+            .collect();
+        let mut course = start.clone();
+        limit_stretch(mesh.springs(), mesh.pinned(), &mut course, MAX_STRETCH);
+        let mut fast = start.clone();
+        let mut sweep = StretchSweep::default();
+        sweep.limit(&stencil, mesh.pinned(), &mut fast, MAX_STRETCH);
+        let changed = course.iter().zip(&start).filter(|(a, b)| a != b).count();
+        assert!(
+            changed > mesh.len() / 4,
+            "the test must exercise corrections"
+        );
+        for (i, (a, b)) in fast.iter().zip(&course).enumerate() {
+            for c in 0..3 {
+                assert_eq!(a[c].to_bits(), b[c].to_bits(), "point {i} axis {c}");
+            }
+        }
+        // A second sweep over the corrected cloth (reused scratch) agrees as well.
+        limit_stretch(mesh.springs(), mesh.pinned(), &mut course, MAX_STRETCH);
+        sweep.limit(&stencil, mesh.pinned(), &mut fast, MAX_STRETCH);
+        assert!(fast.iter().zip(&course).all(|(a, b)| a == b));
+    }
+
+    #[test]
+    fn exists_masks_count_the_meshs_springs() {
+        let mesh = pinned_grid(9).unwrap();
+        let total: u32 = (0..mesh.len())
+            .map(|i| exists_mask(9, i % 9, i / 9).count_ones())
+            .sum();
+        assert_eq!(total as usize, mesh.springs().len());
+    }
+}
