@@ -20,6 +20,13 @@ use cloth_mesh::{ClothMesh, Vec3};
 pub struct SpatialHash {
     /// Cell number of each point.
     cell_of: Vec<u32>,
+    /// Box key of each point (lets a point reuse the cell of a neighbour in the same box).
+    key_of: Vec<u64>,
+    /// Each point's position in `members`.
+    slot_of: Vec<u32>,
+    /// The points' positions in `members` order: a box's points are contiguous, so the pair
+    /// loop reads consecutive memory instead of gathering from the whole cloth.
+    sorted: Vec<Vec3>,
     /// `start[c]..start[c + 1]` is cell `c`'s range in `members` (length cells + 1).
     start: Vec<u32>,
     /// Point indices grouped by cell.
@@ -99,28 +106,24 @@ impl SpatialHash {
 
         // Cell number per point; `start` first holds the count per cell.
         self.cell_of.resize(n, 0);
+        self.key_of.resize(n, 0);
         self.start.clear();
-        for (p, cell_of) in positions.iter().zip(&mut self.cell_of) {
+        let nw = mesh.nw();
+        for (i, p) in positions.iter().enumerate() {
             let key = Self::key(p, size);
-            // Fibonacci hashing: the top bits of key * 2^64/phi spread neighbouring boxes.
-            let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
-            let cell = loop {
-                let s = &mut self.slots[slot];
-                if s.stamp != self.stamp {
-                    *s = Slot {
-                        key,
-                        cell: self.start.len() as u32,
-                        stamp: self.stamp,
-                    };
-                    self.start.push(0);
-                    break s.cell;
-                }
-                if s.key == key {
-                    break s.cell;
-                }
-                slot = (slot + 1) & mask;
+            self.key_of[i] = key;
+            // NOTE: boxes are three spacings wide, so most points share the box of the point
+            // before them or of the one a row up. Taking the cell from them skips the probe
+            // (a cache miss on a big cloth) and hands out the same cell as the table would: a
+            // key seen before is in the table with that cell.
+            let cell = if i >= 1 && self.key_of[i - 1] == key {
+                self.cell_of[i - 1]
+            } else if i >= nw && self.key_of[i - nw] == key {
+                self.cell_of[i - nw]
+            } else {
+                self.probe(key, shift, mask)
             };
-            *cell_of = cell;
+            self.cell_of[i] = cell;
             self.start[cell as usize] += 1;
         }
 
@@ -134,13 +137,40 @@ impl SpatialHash {
         }
         self.start.push(sum);
         self.members.resize(n, 0);
+        self.slot_of.resize(n, 0);
+        self.sorted.resize(n, Vec3::zeros());
         for (i, &c) in self.cell_of.iter().enumerate() {
             let s = &mut self.start[c as usize];
             self.members[*s as usize] = i as u32;
+            self.slot_of[i] = *s;
+            self.sorted[*s as usize] = positions[i];
             *s += 1;
         }
         self.start.rotate_right(1);
         self.start[0] = 0;
+    }
+
+    /// The cell of `key`, from the open-addressing table (a new cell when the key is new).
+    #[inline]
+    fn probe(&mut self, key: u64, shift: u32, mask: usize) -> u32 {
+        // Fibonacci hashing: the top bits of key * 2^64/phi spread neighbouring boxes.
+        let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
+        loop {
+            let s = &mut self.slots[slot];
+            if s.stamp != self.stamp {
+                *s = Slot {
+                    key,
+                    cell: self.start.len() as u32,
+                    stamp: self.stamp,
+                };
+                self.start.push(0);
+                return s.cell;
+            }
+            if s.key == key {
+                return s.cell;
+            }
+            slot = (slot + 1) & mask;
+        }
     }
 
     /// The points in point `i`'s box (including `i`), in index order, as of the last rebuild.
@@ -150,8 +180,14 @@ impl SpatialHash {
 
     #[inline]
     fn cell_members(&self, i: usize) -> &[u32] {
+        &self.members[self.cell_range(i)]
+    }
+
+    /// Point `i`'s box as a range of `members` (and of `sorted`).
+    #[inline]
+    fn cell_range(&self, i: usize) -> std::ops::Range<usize> {
         let c = self.cell_of[i] as usize;
-        &self.members[self.start[c] as usize..self.start[c + 1] as usize]
+        self.start[c] as usize..self.start[c + 1] as usize
     }
 
     /// Pushes every unpinned point away from the other points of its box that are closer than
@@ -165,8 +201,13 @@ impl SpatialHash {
         let pinned = mesh.pinned();
         for i in 0..positions.len() {
             if !pinned[i] {
-                if let Some(p) = repulsion.corrected(self.cell_members(i), i, positions) {
+                let (range, slot) = (self.cell_range(i), self.slot_of[i] as usize);
+                if let Some(p) =
+                    repulsion.corrected(&self.sorted[range.clone()], slot - range.start)
+                {
+                    // NOTE: `sorted` mirrors `positions`: later points see this correction.
                     positions[i] = p;
+                    self.sorted[slot] = p;
                 }
             }
         }
@@ -174,7 +215,7 @@ impl SpatialHash {
 
     /// [`SpatialHash::resolve`] in an order threads can share ([`ConstraintOrder::Parallel`]):
     /// every point's correction is computed from the positions at the start of the pass
-    /// (kept in `snapshot`), rather than from the already-corrected positions of the points
+    /// (kept in the hash's cell-ordered copy), rather than from the already-corrected positions of the points
     /// before it. The pairs, the repulsion and its averaging are the course's.
     ///
     /// [`ConstraintOrder::Parallel`]: crate::ConstraintOrder::Parallel
@@ -182,7 +223,6 @@ impl SpatialHash {
         &mut self,
         mesh: &ClothMesh,
         positions: &mut [Vec3],
-        snapshot: &mut Vec<Vec3>,
         steps_per_frame: u32,
         pool: Option<&rayon::ThreadPool>,
     ) {
@@ -191,16 +231,18 @@ impl SpatialHash {
         // depend on the chunking or the thread count.
         const CHUNK: usize = 4096;
         self.rebuild(mesh, positions);
-        snapshot.clear();
-        snapshot.extend_from_slice(positions);
         let repulsion = Repulsion::new(mesh, steps_per_frame);
         let pinned = mesh.pinned();
-        let (hash, snapshot) = (&*self, &snapshot[..]);
+        // NOTE: `sorted` holds the positions at the start of the pass and is never written
+        // during it, so it is the snapshot the corrections are computed from.
+        let hash = &*self;
         let correct = |c: usize, out: &mut [Vec3]| {
             for (k, p) in out.iter_mut().enumerate() {
                 let i = c * CHUNK + k;
                 if !pinned[i] {
-                    if let Some(q) = repulsion.corrected(hash.cell_members(i), i, snapshot) {
+                    let (range, slot) = (hash.cell_range(i), hash.slot_of[i] as usize);
+                    let members = &hash.sorted[range.clone()];
+                    if let Some(q) = repulsion.corrected(members, slot - range.start) {
                         *p = q;
                     }
                 }
@@ -246,22 +288,21 @@ impl Repulsion {
         }
     }
 
-    /// Point `i`'s corrected position given the positions of the `members` of its box, or
-    /// `None` when no other member is within reach.
+    /// The corrected position of the point at `me` among the `members` of its box (their
+    /// positions, in index order), or `None` when no other member is within reach.
     #[inline]
-    fn corrected(&self, members: &[u32], i: usize, positions: &[Vec3]) -> Option<Vec3> {
+    fn corrected(&self, members: &[Vec3], me: usize) -> Option<Vec3> {
         if members.len() < 2 {
             return None;
         }
-        let p = positions[i];
+        let p = members[me];
         let mut correction = Vec3::zeros();
         let mut count = 0u32;
-        for &j in members {
-            let j = j as usize;
-            if j == i {
+        for (k, q) in members.iter().enumerate() {
+            if k == me {
                 continue;
             }
-            let d = p - positions[j];
+            let d = p - q;
             let d2 = dist2(&d);
             if d2 >= self.reach2_out {
                 continue;

@@ -76,8 +76,6 @@ pub struct Verlet {
     hash: SpatialHash,
     /// The stretch limit's bands for [`ConstraintOrder::Parallel`], rebuilt with the stencil.
     bands: StretchBands,
-    /// Positions at the start of the parallel self-collision pass.
-    snapshot: Vec<Vec3>,
     /// Scratch of the faithful stretch-limit sweep.
     stretch: StretchSweep,
 }
@@ -228,8 +226,8 @@ impl Solver for Verlet {
         // 3. Self-collision.
         if params.self_collision {
             if parallel {
-                let (hash, snapshot) = (&mut self.hash, &mut self.snapshot);
-                hash.resolve_from_snapshot(mesh, positions, snapshot, params.steps_per_frame, pool);
+                self.hash
+                    .resolve_from_snapshot(mesh, positions, params.steps_per_frame, pool);
             } else {
                 self.hash.resolve(mesh, positions, params.steps_per_frame);
             }
