@@ -88,43 +88,21 @@ impl SpatialHash {
     pub fn rebuild(&mut self, mesh: &ClothMesh, positions: &[Vec3]) {
         let size = Self::box_size(mesh);
         let n = positions.len();
-        // A load factor of at most 1/2 keeps linear-probing chains short.
-        let table = (2 * n).next_power_of_two().max(16);
-        if self.slots.len() != table {
-            self.slots.clear();
-            self.slots.resize(table, Slot::default());
-            self.stamp = 0;
+        // NOTE: a load factor of at most 1/2 keeps linear-probing chains short. The table is
+        // sized to the number of boxes in use (about a ninth of the points on a smooth cloth),
+        // not to the points: a big cloth's table then stays in cache. It doubles, and the
+        // assignment restarts, when a rebuild finds more boxes; it halves when far too big.
+        let most = (2 * n).next_power_of_two().max(16);
+        let mut table = self.slots.len().clamp(16, most);
+        while table > 16 && 16 * self.start.len() < table {
+            table /= 2;
         }
-        self.stamp = self.stamp.wrapping_add(1);
-        if self.stamp == 0 {
-            // NOTE: after 2^32 rebuilds the stamps wrap; clear so no stale slot looks current.
-            self.slots.fill(Slot::default());
-            self.stamp = 1;
-        }
-        let shift = 64 - table.trailing_zeros();
-        let mask = table - 1;
-
-        // Cell number per point; `start` first holds the count per cell.
-        self.cell_of.resize(n, 0);
-        self.key_of.resize(n, 0);
-        self.start.clear();
-        let nw = mesh.nw();
-        for (i, p) in positions.iter().enumerate() {
-            let key = Self::key(p, size);
-            self.key_of[i] = key;
-            // NOTE: boxes are three spacings wide, so most points share the box of the point
-            // before them or of the one a row up. Taking the cell from them skips the probe
-            // (a cache miss on a big cloth) and hands out the same cell as the table would: a
-            // key seen before is in the table with that cell.
-            let cell = if i >= 1 && self.key_of[i - 1] == key {
-                self.cell_of[i - 1]
-            } else if i >= nw && self.key_of[i - nw] == key {
-                self.cell_of[i - nw]
-            } else {
-                self.probe(key, shift, mask)
-            };
-            self.cell_of[i] = cell;
-            self.start[cell as usize] += 1;
+        loop {
+            self.clear_table(table);
+            if self.assign_cells(mesh.nw(), positions, size) {
+                break;
+            }
+            table *= 2;
         }
 
         // Exclusive prefix sum, then place points in index order; afterwards `start[c]` has
@@ -148,6 +126,56 @@ impl SpatialHash {
         }
         self.start.rotate_right(1);
         self.start[0] = 0;
+    }
+
+    /// Makes `slots` an empty table of `table` slots (a new generation when the size is kept).
+    fn clear_table(&mut self, table: usize) {
+        if self.slots.len() != table {
+            self.slots.clear();
+            self.slots.resize(table, Slot::default());
+            self.stamp = 0;
+        }
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            // NOTE: after 2^32 rebuilds the stamps wrap; clear so no stale slot looks current.
+            self.slots.fill(Slot::default());
+            self.stamp = 1;
+        }
+    }
+
+    /// Gives every point the cell of its box (cells numbered in order of first appearance) and
+    /// counts the points per cell into `start`; false, with the work abandoned, when the boxes
+    /// fill more than half the table.
+    fn assign_cells(&mut self, nw: usize, positions: &[Vec3], size: (f64, f64, f64)) -> bool {
+        let n = positions.len();
+        let table = self.slots.len();
+        let shift = 64 - table.trailing_zeros();
+        let mask = table - 1;
+        self.cell_of.resize(n, 0);
+        self.key_of.resize(n, 0);
+        self.start.clear();
+        for (i, p) in positions.iter().enumerate() {
+            let key = Self::key(p, size);
+            self.key_of[i] = key;
+            // NOTE: boxes are three spacings wide, so most points share the box of the point
+            // before them or of the one a row up. Taking the cell from them skips the probe
+            // (a cache miss on a big cloth) and hands out the same cell as the table would: a
+            // key seen before is in the table with that cell.
+            let cell = if i >= 1 && self.key_of[i - 1] == key {
+                self.cell_of[i - 1]
+            } else if i >= nw && self.key_of[i - nw] == key {
+                self.cell_of[i - nw]
+            } else {
+                let cell = self.probe(key, shift, mask);
+                if 2 * self.start.len() > table {
+                    return false;
+                }
+                cell
+            };
+            self.cell_of[i] = cell;
+            self.start[cell as usize] += 1;
+        }
+        true
     }
 
     /// The cell of `key`, from the open-addressing table (a new cell when the key is new).
