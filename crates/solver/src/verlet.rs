@@ -208,6 +208,9 @@ impl Solver for Verlet {
         if !self.stencil.as_ref().is_some_and(|s| s.matches(mesh)) {
             self.stencil = Some(Stencil::new(mesh)?);
             self.bands = StretchBands::new(mesh);
+            if let Some(stencil) = &self.stencil {
+                self.stretch = StretchSweep::new(stencil, MAX_STRETCH);
+            }
         }
         let pins: &[usize] = self.stencil.as_ref().map_or(&[], |s| &s.pins);
         self.pinned_last.clear();
@@ -243,8 +246,7 @@ impl Solver for Verlet {
                 self.bands
                     .limit(springs, pinned, positions, MAX_STRETCH, pool);
             } else if let Some(stencil) = &self.stencil {
-                self.stretch
-                    .limit(stencil, mesh.pinned(), positions, MAX_STRETCH);
+                self.stretch.limit(stencil, mesh.pinned(), positions);
             } else {
                 limit_stretch(mesh.springs(), mesh.pinned(), positions, MAX_STRETCH);
             }

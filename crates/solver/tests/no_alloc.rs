@@ -63,7 +63,15 @@ fn allocations_after_warmup(solver: &mut dyn Solver, warmup: usize, frames: usiz
 #[test]
 fn a_warm_solver_steps_without_allocating() {
     let mut faithful = Verlet::new();
-    assert_eq!(allocations_after_warmup(&mut faithful, 30, 30), 0, "faithful");
+    assert_eq!(
+        allocations_after_warmup(&mut faithful, 30, 30),
+        0,
+        "faithful"
+    );
     let mut parallel = Verlet::new().with_order(ConstraintOrder::Parallel);
-    assert_eq!(allocations_after_warmup(&mut parallel, 30, 30), 0, "parallel, one thread");
+    assert_eq!(
+        allocations_after_warmup(&mut parallel, 30, 30),
+        0,
+        "parallel, one thread"
+    );
 }

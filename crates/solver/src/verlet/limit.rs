@@ -12,14 +12,18 @@
 //!
 //! 1. A pre-pass computes the squared length of every spring from the positions at the start of
 //!    the sweep, row by row and direction by direction on struct-of-arrays copies (so it runs on
-//!    SIMD lanes), and marks the springs not proven inside the limit.
+//!    SIMD lanes), and marks the springs not proven inside the limit. It compares with one bound
+//!    per direction, the smallest of the springs' own bounds, so it reads no rest lengths (on a
+//!    big cloth they are three times the positions' memory); the few springs between that bound
+//!    and their own get the exact check below.
 //! 2. The sequential sweep walks the springs in the course's order (point by point, the six
 //!    directions in order, exactly the spring list's order) and runs the course's check on a
 //!    spring only when it is marked or one of its ends has moved since the sweep began.
 //!
 //! A skipped spring has both ends at their start positions, so the course's check would compute
-//! the very squared length of the pre-pass (same operands, same operations: [`limit_one`] and
-//! the pre-pass share [`inside_bound`]) and skip it too. Every other spring gets the course's
+//! the very squared length of the pre-pass (same operands, same operations) and, that length
+//! being at most the smallest [`inside_bound`] of its direction, hence at most its own, skip it
+//! too. Every other spring gets the course's
 //! check on the current positions. So the sweep makes the same corrections in the same order.
 
 // NOTE: the pre-pass helpers are `#[inline(always)]` so they are compiled into its AVX2 build.
@@ -30,9 +34,13 @@ use cloth_mesh::Vec3;
 use super::sweep::{DIRECTIONS, Stencil, valid_columns};
 use crate::stretch::{inside_bound, limit_one};
 
-/// Scratch memory of the sweep; grows once per mesh.
+/// Scratch memory of the sweep, built for one stencil (rebuilt with it).
 #[derive(Debug, Default, Clone)]
 pub(crate) struct StretchSweep {
+    /// The stretch ratio the bounds were computed for.
+    ratio: f64,
+    /// Per direction: the smallest [`inside_bound`] of its springs.
+    floor: [f64; 6],
     /// Struct-of-arrays copy of the positions at the start of the sweep.
     soa: [Vec<f64>; 3],
     /// Per point: bit `t` set when its direction-`t` spring exists and is not proven inside.
@@ -45,26 +53,38 @@ pub(crate) struct StretchSweep {
 }
 
 impl StretchSweep {
+    /// Scratch and bounds for sweeps of `stencil`'s springs at the stretch `ratio`.
+    pub(crate) fn new(stencil: &Stencil, ratio: f64) -> Self {
+        let (nw, nh) = (stencil.nw(), stencil.nh());
+        let exists: Vec<u8> = (0..nw * nh)
+            .map(|i| exists_mask(nw, i % nw, i / nw))
+            .collect();
+        let mut floor = [f64::INFINITY; 6];
+        for (t, floor) in floor.iter_mut().enumerate() {
+            for (&rest, &mask) in stencil.rest(t).iter().zip(&exists) {
+                if mask & (1 << t) != 0 {
+                    *floor = floor.min(inside_bound(ratio * rest));
+                }
+            }
+        }
+        Self {
+            ratio,
+            floor,
+            exists,
+            ..Self::default()
+        }
+    }
+
     /// One sweep of the stretch limit over all of `stencil`'s springs, in the course's order.
-    pub(crate) fn limit(
-        &mut self,
-        stencil: &Stencil,
-        pinned: &[bool],
-        positions: &mut [Vec3],
-        ratio: f64,
-    ) {
+    pub(crate) fn limit(&mut self, stencil: &Stencil, pinned: &[bool], positions: &mut [Vec3]) {
         let (nw, nh) = (stencil.nw(), stencil.nh());
         let n = nw * nh;
         let margin = 2 * nw + 1;
-        if self.exists.len() != n {
-            self.exists.clear();
-            self.exists
-                .extend((0..n).map(|i| exists_mask(nw, i % nw, i / nw)));
-        }
+        let ratio = self.ratio;
         self.check.resize(n, 0);
         self.moved.clear();
         self.moved.resize(margin + n, false);
-        self.prepass(stencil, positions, ratio);
+        self.prepass(stencil, positions);
 
         let offsets = DIRECTIONS.map(|(dx, dy, _)| dx + dy * nw as isize);
         let moved = &mut self.moved;
@@ -97,17 +117,17 @@ impl StretchSweep {
     }
 
     /// Marks the springs not proven inside the limit from the current positions.
-    fn prepass(&mut self, stencil: &Stencil, positions: &[Vec3], ratio: f64) {
+    fn prepass(&mut self, stencil: &Stencil, positions: &[Vec3]) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2, checked just above.
             #[allow(unsafe_code)]
             unsafe {
-                self.prepass_avx2(stencil, positions, ratio);
+                self.prepass_avx2(stencil, positions);
             }
             return;
         }
-        self.prepass_portable(stencil, positions, ratio);
+        self.prepass_portable(stencil, positions);
     }
 
     /// The pre-pass compiled for AVX2 (same operations, four lanes; see `Stencil::sweep_avx2`).
@@ -117,12 +137,12 @@ impl StretchSweep {
     #[cfg(target_arch = "x86_64")]
     #[allow(unsafe_code)]
     #[target_feature(enable = "avx2")]
-    unsafe fn prepass_avx2(&mut self, stencil: &Stencil, positions: &[Vec3], ratio: f64) {
-        self.prepass_portable(stencil, positions, ratio);
+    unsafe fn prepass_avx2(&mut self, stencil: &Stencil, positions: &[Vec3]) {
+        self.prepass_portable(stencil, positions);
     }
 
     #[inline(always)]
-    fn prepass_portable(&mut self, stencil: &Stencil, positions: &[Vec3], ratio: f64) {
+    fn prepass_portable(&mut self, stencil: &Stencil, positions: &[Vec3]) {
         let (nw, nh) = (stencil.nw(), stencil.nh());
         for (c, soa) in self.soa.iter_mut().enumerate() {
             soa.clear();
@@ -140,7 +160,7 @@ impl StretchSweep {
                 let a = y * nw + cols.start;
                 let b = a.wrapping_add_signed(dx + dy * nw as isize);
                 let len = cols.len();
-                let rest = &stencil.rest(t)[a..a + len];
+                let floor = self.floor[t];
                 let (ax, ay, az) = (&px[a..a + len], &py[a..a + len], &pz[a..a + len]);
                 let (bx, by, bz) = (&px[b..b + len], &py[b..b + len], &pz[b..b + len]);
                 let out = &mut row[cols];
@@ -149,7 +169,7 @@ impl StretchSweep {
                     // operand, so the decision is the sequential check's.
                     let (ddx, ddy, ddz) = (bx[i] - ax[i], by[i] - ay[i], bz[i] - az[i]);
                     let len2 = ddx * ddx + ddy * ddy + ddz * ddz;
-                    let inside = len2 <= inside_bound(ratio * rest[i]);
+                    let inside = len2 <= floor;
                     out[i] |= u8::from(!inside) << t;
                 }
             }
@@ -189,8 +209,8 @@ mod tests {
         let mut course = start.clone();
         limit_stretch(mesh.springs(), mesh.pinned(), &mut course, MAX_STRETCH);
         let mut fast = start.clone();
-        let mut sweep = StretchSweep::default();
-        sweep.limit(&stencil, mesh.pinned(), &mut fast, MAX_STRETCH);
+        let mut sweep = StretchSweep::new(&stencil, MAX_STRETCH);
+        sweep.limit(&stencil, mesh.pinned(), &mut fast);
         let changed = course.iter().zip(&start).filter(|(a, b)| a != b).count();
         assert!(
             changed > mesh.len() / 4,
@@ -203,7 +223,7 @@ mod tests {
         }
         // A second sweep over the corrected cloth (reused scratch) agrees as well.
         limit_stretch(mesh.springs(), mesh.pinned(), &mut course, MAX_STRETCH);
-        sweep.limit(&stencil, mesh.pinned(), &mut fast, MAX_STRETCH);
+        sweep.limit(&stencil, mesh.pinned(), &mut fast);
         assert!(fast.iter().zip(&course).all(|(a, b)| a == b));
     }
 
