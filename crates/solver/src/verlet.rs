@@ -241,10 +241,10 @@ impl Solver for Verlet {
 
         // 5. Stretch limit.
         if params.stretch_limit {
-            if parallel {
-                let (springs, pinned) = (mesh.springs(), mesh.pinned());
-                self.bands
-                    .limit(springs, pinned, positions, MAX_STRETCH, pool);
+            if let (true, Some(stencil)) = (parallel, &self.stencil) {
+                let bands = &self.bands;
+                self.stretch
+                    .limit_bands(stencil, bands, mesh.pinned(), positions, pool);
             } else if let Some(stencil) = &self.stencil {
                 self.stretch.limit(stencil, mesh.pinned(), positions);
             } else {

@@ -29,31 +29,47 @@
 // NOTE: the pre-pass helpers are `#[inline(always)]` so they are compiled into its AVX2 build.
 #![allow(clippy::inline_always)]
 
+use std::ops::Range;
+
 use cloth_mesh::Vec3;
 
 use super::sweep::{DIRECTIONS, Stencil, valid_columns};
-use crate::stretch::{inside_bound, limit_one};
+use crate::stretch::{Band, StretchBands, for_each_band, inside_bound, limit_one};
 
-/// Scratch memory of the sweep, built for one stencil (rebuilt with it).
+/// The sweep's bounds and scratch memory, built for one stencil (rebuilt with it).
 #[derive(Debug, Default, Clone)]
 pub(crate) struct StretchSweep {
+    bounds: Bounds,
+    /// One per band that may run at once.
+    scratch: Vec<BandScratch>,
+}
+
+/// What every band reads.
+#[derive(Debug, Default, Clone)]
+struct Bounds {
     /// The stretch ratio the bounds were computed for.
     ratio: f64,
     /// Per direction: the smallest [`inside_bound`] of its springs.
     floor: [f64; 6],
-    /// Struct-of-arrays copy of the positions at the start of the sweep.
-    soa: [Vec<f64>; 3],
-    /// Per point: bit `t` set when its direction-`t` spring exists and is not proven inside.
-    check: Vec<u8>,
     /// Per point: bit `t` set when its direction-`t` spring exists.
     exists: Vec<u8>,
-    /// `moved[MARGIN + i]`: point `i` moved during this sweep. The margin lets the sweep read
-    /// the flags of the partners of points in the first two rows without bounds tests.
+}
+
+/// Scratch memory of one band's sweep; grows once.
+#[derive(Debug, Default, Clone)]
+struct BandScratch {
+    /// Struct-of-arrays copy of the band's positions at the start of its sweep.
+    soa: [Vec<f64>; 3],
+    /// Per emitting point: bit `t` set when its direction-`t` spring exists and is not proven
+    /// inside.
+    check: Vec<u8>,
+    /// `moved[margin + i]`: point `i` of the band's window moved during this sweep. The margin
+    /// lets the sweep read the flags of partners in the first two rows without bounds tests.
     moved: Vec<bool>,
 }
 
 impl StretchSweep {
-    /// Scratch and bounds for sweeps of `stencil`'s springs at the stretch `ratio`.
+    /// Bounds and scratch for sweeps of `stencil`'s springs at the stretch `ratio`.
     pub(crate) fn new(stencil: &Stencil, ratio: f64) -> Self {
         let (nw, nh) = (stencil.nw(), stencil.nh());
         let exists: Vec<u8> = (0..nw * nh)
@@ -68,27 +84,79 @@ impl StretchSweep {
             }
         }
         Self {
-            ratio,
-            floor,
-            exists,
-            ..Self::default()
+            bounds: Bounds {
+                ratio,
+                floor,
+                exists,
+            },
+            scratch: Vec::new(),
         }
     }
 
     /// One sweep of the stretch limit over all of `stencil`'s springs, in the course's order.
     pub(crate) fn limit(&mut self, stencil: &Stencil, pinned: &[bool], positions: &mut [Vec3]) {
-        let (nw, nh) = (stencil.nw(), stencil.nh());
-        let n = nw * nh;
+        self.scratch.resize_with(1, BandScratch::default);
+        let rows = 0..stencil.nh();
+        self.scratch[0].sweep(&self.bounds, stencil, pinned, positions, rows);
+    }
+
+    /// The sweep in `bands`' order ([`crate::ConstraintOrder::Parallel`]): the blocks at once,
+    /// then the seams at once, each band in the course's order, on `pool`'s threads.
+    pub(crate) fn limit_bands(
+        &mut self,
+        stencil: &Stencil,
+        bands: &StretchBands,
+        pinned: &[bool],
+        positions: &mut [Vec3],
+        pool: Option<&rayon::ThreadPool>,
+    ) {
+        self.scratch
+            .resize_with(bands.widest(), BandScratch::default);
+        let bounds = &self.bounds;
+        let sweep = |band: &Band, scratch: &mut BandScratch, window: &mut [Vec3]| {
+            let pinned = &pinned[band.points.clone()];
+            scratch.sweep(bounds, stencil, pinned, window, band.rows.clone());
+        };
+        for phase in bands.phases() {
+            let scratch = &mut self.scratch[..];
+            match pool {
+                Some(pool) => {
+                    pool.install(|| for_each_band(phase, scratch, positions, 0, true, &sweep));
+                }
+                None => for_each_band(phase, scratch, positions, 0, false, &sweep),
+            }
+        }
+    }
+}
+
+impl BandScratch {
+    /// The sweep over the springs emitted by `rows`, in the course's order. `positions` and
+    /// `pinned` are the window of points those springs touch: from two rows before `rows`
+    /// (or the first row) to the end of `rows`.
+    fn sweep(
+        &mut self,
+        bounds: &Bounds,
+        stencil: &Stencil,
+        pinned: &[bool],
+        positions: &mut [Vec3],
+        rows: Range<usize>,
+    ) {
+        let nw = stencil.nw();
+        let first = rows.start.saturating_sub(2) * nw;
+        let emitters = rows.start * nw..rows.end * nw;
         let margin = 2 * nw + 1;
-        let ratio = self.ratio;
-        self.check.resize(n, 0);
+        let ratio = bounds.ratio;
+        self.check.resize(emitters.len(), 0);
         self.moved.clear();
-        self.moved.resize(margin + n, false);
-        self.prepass(stencil, positions);
+        self.moved.resize(margin + positions.len(), false);
+        self.prepass(bounds, stencil, positions, first, rows);
 
         let offsets = DIRECTIONS.map(|(dx, dy, _)| dx + dy * nw as isize);
         let moved = &mut self.moved;
-        for (j, (&check, &exists)) in self.check.iter().zip(&self.exists).enumerate() {
+        let exists = &bounds.exists[emitters.clone()];
+        for (k, (&check, &exists)) in self.check.iter().zip(exists).enumerate() {
+            // `j`: the emitter's index in the window; its global index is `first + j`.
+            let (j, global) = (emitters.start - first + k, emitters.start + k);
             // Springs to look at: marked by the pre-pass, or with a partner that moved. The
             // emitter itself cannot have moved yet: earlier springs only touch earlier points.
             let mut look = check;
@@ -107,7 +175,8 @@ impl StretchSweep {
                     continue;
                 }
                 let b = j.wrapping_add_signed(off);
-                if limit_one(j, b, stencil.rest(t)[j], pinned, positions, ratio) {
+                let rest = stencil.rest(t)[global];
+                if limit_one(j, b, rest, pinned, positions, ratio) {
                     emitter_moved = true;
                     moved[margin + j] = true;
                     moved[margin + b] = true;
@@ -116,18 +185,26 @@ impl StretchSweep {
         }
     }
 
-    /// Marks the springs not proven inside the limit from the current positions.
-    fn prepass(&mut self, stencil: &Stencil, positions: &[Vec3]) {
+    /// Marks the springs emitted by `rows` that are not proven inside the limit, from the
+    /// window's current positions (the window starts at point `first`).
+    fn prepass(
+        &mut self,
+        bounds: &Bounds,
+        stencil: &Stencil,
+        positions: &[Vec3],
+        first: usize,
+        rows: Range<usize>,
+    ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2, checked just above.
             #[allow(unsafe_code)]
             unsafe {
-                self.prepass_avx2(stencil, positions);
+                self.prepass_avx2(bounds, stencil, positions, first, rows);
             }
             return;
         }
-        self.prepass_portable(stencil, positions);
+        self.prepass_portable(bounds, stencil, positions, first, rows);
     }
 
     /// The pre-pass compiled for AVX2 (same operations, four lanes; see `Stencil::sweep_avx2`).
@@ -137,30 +214,44 @@ impl StretchSweep {
     #[cfg(target_arch = "x86_64")]
     #[allow(unsafe_code)]
     #[target_feature(enable = "avx2")]
-    unsafe fn prepass_avx2(&mut self, stencil: &Stencil, positions: &[Vec3]) {
-        self.prepass_portable(stencil, positions);
+    unsafe fn prepass_avx2(
+        &mut self,
+        bounds: &Bounds,
+        stencil: &Stencil,
+        positions: &[Vec3],
+        first: usize,
+        rows: Range<usize>,
+    ) {
+        self.prepass_portable(bounds, stencil, positions, first, rows);
     }
 
     #[inline(always)]
-    fn prepass_portable(&mut self, stencil: &Stencil, positions: &[Vec3]) {
-        let (nw, nh) = (stencil.nw(), stencil.nh());
+    fn prepass_portable(
+        &mut self,
+        bounds: &Bounds,
+        stencil: &Stencil,
+        positions: &[Vec3],
+        first: usize,
+        rows: Range<usize>,
+    ) {
+        let nw = stencil.nw();
         for (c, soa) in self.soa.iter_mut().enumerate() {
             soa.clear();
             soa.extend(positions.iter().map(|p| p[c]));
         }
         let [px, py, pz] = &self.soa;
-        for y in 0..nh {
-            let row = &mut self.check[y * nw..(y + 1) * nw];
+        for (k, y) in rows.enumerate() {
+            let row = &mut self.check[k * nw..(k + 1) * nw];
             row.fill(0);
             for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
                 let cols = valid_columns(nw, dx);
                 if y < (-dy) as usize || cols.is_empty() {
                     continue;
                 }
-                let a = y * nw + cols.start;
+                let a = y * nw + cols.start - first;
                 let b = a.wrapping_add_signed(dx + dy * nw as isize);
                 let len = cols.len();
-                let floor = self.floor[t];
+                let floor = bounds.floor[t];
                 let (ax, ay, az) = (&px[a..a + len], &py[a..a + len], &pz[a..a + len]);
                 let (bx, by, bz) = (&px[b..b + len], &py[b..b + len], &pz[b..b + len]);
                 let out = &mut row[cols];
