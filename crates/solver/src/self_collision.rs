@@ -20,6 +20,13 @@ use cloth_mesh::{ClothMesh, Vec3};
 pub struct SpatialHash {
     /// Cell number of each point.
     cell_of: Vec<u32>,
+    /// Box key of each point (lets a point reuse the cell of a neighbour in the same box).
+    key_of: Vec<u64>,
+    /// Each point's position in `members`.
+    slot_of: Vec<u32>,
+    /// The points' positions in `members` order: a box's points are contiguous, so the pair
+    /// loop reads consecutive memory instead of gathering from the whole cloth.
+    sorted: Vec<Vec3>,
     /// `start[c]..start[c + 1]` is cell `c`'s range in `members` (length cells + 1).
     start: Vec<u32>,
     /// Point indices grouped by cell.
@@ -81,47 +88,21 @@ impl SpatialHash {
     pub fn rebuild(&mut self, mesh: &ClothMesh, positions: &[Vec3]) {
         let size = Self::box_size(mesh);
         let n = positions.len();
-        // A load factor of at most 1/2 keeps linear-probing chains short.
-        let table = (2 * n).next_power_of_two().max(16);
-        if self.slots.len() != table {
-            self.slots.clear();
-            self.slots.resize(table, Slot::default());
-            self.stamp = 0;
+        // NOTE: a load factor of at most 1/2 keeps linear-probing chains short. The table is
+        // sized to the number of boxes in use (about a ninth of the points on a smooth cloth),
+        // not to the points: a big cloth's table then stays in cache. It doubles, and the
+        // assignment restarts, when a rebuild finds more boxes; it halves when far too big.
+        let most = (2 * n).next_power_of_two().max(16);
+        let mut table = self.slots.len().clamp(16, most);
+        while table > 16 && 16 * self.start.len() < table {
+            table /= 2;
         }
-        self.stamp = self.stamp.wrapping_add(1);
-        if self.stamp == 0 {
-            // NOTE: after 2^32 rebuilds the stamps wrap; clear so no stale slot looks current.
-            self.slots.fill(Slot::default());
-            self.stamp = 1;
-        }
-        let shift = 64 - table.trailing_zeros();
-        let mask = table - 1;
-
-        // Cell number per point; `start` first holds the count per cell.
-        self.cell_of.resize(n, 0);
-        self.start.clear();
-        for (p, cell_of) in positions.iter().zip(&mut self.cell_of) {
-            let key = Self::key(p, size);
-            // Fibonacci hashing: the top bits of key * 2^64/phi spread neighbouring boxes.
-            let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
-            let cell = loop {
-                let s = &mut self.slots[slot];
-                if s.stamp != self.stamp {
-                    *s = Slot {
-                        key,
-                        cell: self.start.len() as u32,
-                        stamp: self.stamp,
-                    };
-                    self.start.push(0);
-                    break s.cell;
-                }
-                if s.key == key {
-                    break s.cell;
-                }
-                slot = (slot + 1) & mask;
-            };
-            *cell_of = cell;
-            self.start[cell as usize] += 1;
+        loop {
+            self.clear_table(table);
+            if self.assign_cells(mesh.nw(), positions, size) {
+                break;
+            }
+            table *= 2;
         }
 
         // Exclusive prefix sum, then place points in index order; afterwards `start[c]` has
@@ -134,13 +115,90 @@ impl SpatialHash {
         }
         self.start.push(sum);
         self.members.resize(n, 0);
+        self.slot_of.resize(n, 0);
+        self.sorted.resize(n, Vec3::zeros());
         for (i, &c) in self.cell_of.iter().enumerate() {
             let s = &mut self.start[c as usize];
             self.members[*s as usize] = i as u32;
+            self.slot_of[i] = *s;
+            self.sorted[*s as usize] = positions[i];
             *s += 1;
         }
         self.start.rotate_right(1);
         self.start[0] = 0;
+    }
+
+    /// Makes `slots` an empty table of `table` slots (a new generation when the size is kept).
+    fn clear_table(&mut self, table: usize) {
+        if self.slots.len() != table {
+            self.slots.clear();
+            self.slots.resize(table, Slot::default());
+            self.stamp = 0;
+        }
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            // NOTE: after 2^32 rebuilds the stamps wrap; clear so no stale slot looks current.
+            self.slots.fill(Slot::default());
+            self.stamp = 1;
+        }
+    }
+
+    /// Gives every point the cell of its box (cells numbered in order of first appearance) and
+    /// counts the points per cell into `start`; false, with the work abandoned, when the boxes
+    /// fill more than half the table.
+    fn assign_cells(&mut self, nw: usize, positions: &[Vec3], size: (f64, f64, f64)) -> bool {
+        let n = positions.len();
+        let table = self.slots.len();
+        let shift = 64 - table.trailing_zeros();
+        let mask = table - 1;
+        self.cell_of.resize(n, 0);
+        self.key_of.resize(n, 0);
+        self.start.clear();
+        for (i, p) in positions.iter().enumerate() {
+            let key = Self::key(p, size);
+            self.key_of[i] = key;
+            // NOTE: boxes are three spacings wide, so most points share the box of the point
+            // before them or of the one a row up. Taking the cell from them skips the probe
+            // (a cache miss on a big cloth) and hands out the same cell as the table would: a
+            // key seen before is in the table with that cell.
+            let cell = if i >= 1 && self.key_of[i - 1] == key {
+                self.cell_of[i - 1]
+            } else if i >= nw && self.key_of[i - nw] == key {
+                self.cell_of[i - nw]
+            } else {
+                let cell = self.probe(key, shift, mask);
+                if 2 * self.start.len() > table {
+                    return false;
+                }
+                cell
+            };
+            self.cell_of[i] = cell;
+            self.start[cell as usize] += 1;
+        }
+        true
+    }
+
+    /// The cell of `key`, from the open-addressing table (a new cell when the key is new).
+    #[inline]
+    fn probe(&mut self, key: u64, shift: u32, mask: usize) -> u32 {
+        // Fibonacci hashing: the top bits of key * 2^64/phi spread neighbouring boxes.
+        let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
+        loop {
+            let s = &mut self.slots[slot];
+            if s.stamp != self.stamp {
+                *s = Slot {
+                    key,
+                    cell: self.start.len() as u32,
+                    stamp: self.stamp,
+                };
+                self.start.push(0);
+                return s.cell;
+            }
+            if s.key == key {
+                return s.cell;
+            }
+            slot = (slot + 1) & mask;
+        }
     }
 
     /// The points in point `i`'s box (including `i`), in index order, as of the last rebuild.
@@ -150,8 +208,14 @@ impl SpatialHash {
 
     #[inline]
     fn cell_members(&self, i: usize) -> &[u32] {
+        &self.members[self.cell_range(i)]
+    }
+
+    /// Point `i`'s box as a range of `members` (and of `sorted`).
+    #[inline]
+    fn cell_range(&self, i: usize) -> std::ops::Range<usize> {
         let c = self.cell_of[i] as usize;
-        &self.members[self.start[c] as usize..self.start[c + 1] as usize]
+        self.start[c] as usize..self.start[c + 1] as usize
     }
 
     /// Pushes every unpinned point away from the other points of its box that are closer than
@@ -163,10 +227,27 @@ impl SpatialHash {
         self.rebuild(mesh, positions);
         let repulsion = Repulsion::new(mesh, steps_per_frame);
         let pinned = mesh.pinned();
-        for i in 0..positions.len() {
-            if !pinned[i] {
-                if let Some(p) = repulsion.corrected(self.cell_members(i), i, positions) {
+        // NOTE: a point's correction reads only the points of its own box, and only the
+        // points of that box write them, so boxes are independent: sweeping box by box, each
+        // box's points in index order, makes exactly the corrections of the course's sweep over
+        // all points in index order. That lets a box with no pair within reach at the start of
+        // the pass (most of them) be skipped after one look at each pair, half the work of
+        // asking every point about every other.
+        for c in 0..self.start.len() - 1 {
+            let range = self.start[c] as usize..self.start[c + 1] as usize;
+            if !repulsion.any_pair_within_reach(&self.sorted[range.clone()]) {
+                continue;
+            }
+            for slot in range.clone() {
+                let i = self.members[slot] as usize;
+                if pinned[i] {
+                    continue;
+                }
+                let members = &self.sorted[range.clone()];
+                if let Some(p) = repulsion.corrected(members, slot - range.start) {
+                    // NOTE: `sorted` mirrors `positions`: later points see this correction.
                     positions[i] = p;
+                    self.sorted[slot] = p;
                 }
             }
         }
@@ -174,15 +255,14 @@ impl SpatialHash {
 
     /// [`SpatialHash::resolve`] in an order threads can share ([`ConstraintOrder::Parallel`]):
     /// every point's correction is computed from the positions at the start of the pass
-    /// (kept in `snapshot`), rather than from the already-corrected positions of the points
-    /// before it. The pairs, the repulsion and its averaging are the course's.
+    /// (kept in the hash's cell-ordered copy), rather than from the already-corrected positions
+    /// of the points before it. The pairs, the repulsion and its averaging are the course's.
     ///
     /// [`ConstraintOrder::Parallel`]: crate::ConstraintOrder::Parallel
     pub(crate) fn resolve_from_snapshot(
         &mut self,
         mesh: &ClothMesh,
         positions: &mut [Vec3],
-        snapshot: &mut Vec<Vec3>,
         steps_per_frame: u32,
         pool: Option<&rayon::ThreadPool>,
     ) {
@@ -191,16 +271,18 @@ impl SpatialHash {
         // depend on the chunking or the thread count.
         const CHUNK: usize = 4096;
         self.rebuild(mesh, positions);
-        snapshot.clear();
-        snapshot.extend_from_slice(positions);
         let repulsion = Repulsion::new(mesh, steps_per_frame);
         let pinned = mesh.pinned();
-        let (hash, snapshot) = (&*self, &snapshot[..]);
+        // NOTE: `sorted` holds the positions at the start of the pass and is never written
+        // during it, so it is the snapshot the corrections are computed from.
+        let hash = &*self;
         let correct = |c: usize, out: &mut [Vec3]| {
             for (k, p) in out.iter_mut().enumerate() {
                 let i = c * CHUNK + k;
                 if !pinned[i] {
-                    if let Some(q) = repulsion.corrected(hash.cell_members(i), i, snapshot) {
+                    let (range, slot) = (hash.cell_range(i), hash.slot_of[i] as usize);
+                    let members = &hash.sorted[range.clone()];
+                    if let Some(q) = repulsion.corrected(members, slot - range.start) {
                         *p = q;
                     }
                 }
@@ -246,22 +328,33 @@ impl Repulsion {
         }
     }
 
-    /// Point `i`'s corrected position given the positions of the `members` of its box, or
-    /// `None` when no other member is within reach.
+    /// Whether any two of `members` are closer than the reach, by the test `corrected` skips
+    /// pairs with (`d^2` is the same bits whichever point comes first: `a - b` is exactly
+    /// `-(b - a)`).
     #[inline]
-    fn corrected(&self, members: &[u32], i: usize, positions: &[Vec3]) -> Option<Vec3> {
+    fn any_pair_within_reach(&self, members: &[Vec3]) -> bool {
+        members.iter().enumerate().any(|(k, p)| {
+            members[k + 1..]
+                .iter()
+                .any(|q| dist2(&(p - q)) < self.reach2_out)
+        })
+    }
+
+    /// The corrected position of the point at `me` among the `members` of its box (their
+    /// positions, in index order), or `None` when no other member is within reach.
+    #[inline]
+    fn corrected(&self, members: &[Vec3], me: usize) -> Option<Vec3> {
         if members.len() < 2 {
             return None;
         }
-        let p = positions[i];
+        let p = members[me];
         let mut correction = Vec3::zeros();
         let mut count = 0u32;
-        for &j in members {
-            let j = j as usize;
-            if j == i {
+        for (k, q) in members.iter().enumerate() {
+            if k == me {
                 continue;
             }
-            let d = p - positions[j];
+            let d = p - q;
             let d2 = dist2(&d);
             if d2 >= self.reach2_out {
                 continue;
@@ -312,6 +405,55 @@ mod tests {
                 .filter(|&j| box_index(&positions[j]) == box_index(&positions[i]))
                 .collect();
             assert_eq!(hash.box_of(i).collect::<Vec<_>>(), expected);
+        }
+    }
+
+    #[test]
+    fn box_by_box_resolution_makes_the_courses_point_by_point_corrections_bit_for_bit() {
+        // A cloth crumpled into a 6 cm cube: many boxes with several pairs within reach, so
+        // corrections chain through points corrected earlier in the same box.
+        let mesh = ClothMesh::new(&GridSpec::default()).unwrap();
+        let mut rng = cloth_mesh::SplitMix64::new(5);
+        let start: Vec<Vec3> = (0..mesh.len())
+            .map(|_| {
+                Vec3::new(
+                    rng.uniform(0.0, 0.06),
+                    rng.uniform(0.0, 0.06),
+                    rng.uniform(0.0, 0.06),
+                )
+            })
+            .collect();
+        // The course's sweep, written out: points in index order, boxes from the start.
+        let mut hash = SpatialHash::default();
+        hash.rebuild(&mesh, &start);
+        let boxes: Vec<Vec<usize>> = (0..mesh.len()).map(|i| hash.box_of(i).collect()).collect();
+        let reach = 2.0 * mesh.thickness();
+        let mut course = start.clone();
+        for i in 0..mesh.len() {
+            if mesh.pinned()[i] {
+                continue;
+            }
+            let (mut correction, mut count) = (Vec3::zeros(), 0u32);
+            for &j in &boxes[i] {
+                let d = course[i] - course[j];
+                let dist = d.norm();
+                if j != i && dist < reach && dist > 0.0 {
+                    correction += d * ((reach - dist) / dist);
+                    count += 1;
+                }
+            }
+            if count > 0 {
+                course[i] += correction / f64::from(count) / 30.0;
+            }
+        }
+        let mut fast = start.clone();
+        hash.resolve(&mesh, &mut fast, 30);
+        let moved = course.iter().zip(&start).filter(|(a, b)| a != b).count();
+        assert!(moved > mesh.len() / 2, "the test must exercise corrections");
+        for (i, (a, b)) in fast.iter().zip(&course).enumerate() {
+            for c in 0..3 {
+                assert_eq!(a[c].to_bits(), b[c].to_bits(), "point {i} axis {c}");
+            }
         }
     }
 

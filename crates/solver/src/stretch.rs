@@ -13,27 +13,22 @@ use crate::self_collision::dist2;
 /// all of it when the other is pinned; springs with both ends pinned are left alone.
 /// Compression is not limited. Every spring type is limited, enabled or not.
 pub fn limit_stretch(springs: &[Spring], pinned: &[bool], positions: &mut [Vec3], ratio: f64) {
-    limit_stretch_from(springs, pinned, positions, 0, ratio);
-}
-
-/// [`limit_stretch`] on a window of the points: `positions[0]` and `pinned[0]` are point
-/// `first`, and every spring's ends lie in the window. Lets threads sweep disjoint bands.
-pub(crate) fn limit_stretch_from(
-    springs: &[Spring],
-    pinned: &[bool],
-    positions: &mut [Vec3],
-    first: usize,
-    ratio: f64,
-) {
     for s in springs {
-        let (a, b) = (s.a as usize - first, s.b as usize - first);
-        limit_one(a, b, s.rest, pinned, positions, ratio);
+        limit_one(s.a as usize, s.b as usize, s.rest, pinned, positions, ratio);
     }
 }
 
-/// The course's correction of one spring from `a` to `b`.
+/// The course's correction of one spring from `a` to `b`; true when it was over the limit (and
+/// so may have moved its ends).
 #[inline]
-fn limit_one(a: usize, b: usize, rest: f64, pinned: &[bool], positions: &mut [Vec3], ratio: f64) {
+pub(crate) fn limit_one(
+    a: usize,
+    b: usize,
+    rest: f64,
+    pinned: &[bool],
+    positions: &mut [Vec3],
+    ratio: f64,
+) -> bool {
     let d = positions[b] - positions[a];
     let len2 = dist2(&d);
     let max = ratio * rest;
@@ -41,12 +36,12 @@ fn limit_one(a: usize, b: usize, rest: f64, pinned: &[bool], positions: &mut [Ve
     // square root. It is exact: the computed bound is at most the real max^2 (its rounding is
     // within the 4-ulp margin), so the real length is <= max, and so is the correctly rounded
     // sqrt, because `max` is representable and rounding is monotone.
-    if len2 <= max * max * (1.0 - 4.0 * f64::EPSILON) {
-        return;
+    if len2 <= inside_bound(max) {
+        return false;
     }
     let len = len2.sqrt();
     if len <= max {
-        return;
+        return false;
     }
     let excess = d * ((len - max) / len);
     match (pinned[a], pinned[b]) {
@@ -59,6 +54,17 @@ fn limit_one(a: usize, b: usize, rest: f64, pinned: &[bool], positions: &mut [Ve
             positions[b] -= half;
         }
     }
+    true
+}
+
+/// Squared lengths up to this bound are certainly within `max` (see [`limit_one`]).
+///
+/// NOTE: one definition for the sequential check and the vectorised pre-pass of the Verlet
+/// solver's sweep: both must make the same decision for the same positions, bit for bit.
+#[inline(always)]
+#[allow(clippy::inline_always)]
+pub(crate) fn inside_bound(max: f64) -> f64 {
+    max * max * (1.0 - 4.0 * f64::EPSILON)
 }
 
 /// The stretch limit's sweep cut into row bands that threads can share
@@ -67,7 +73,7 @@ fn limit_one(a: usize, b: usize, rest: f64, pinned: &[bool], positions: &mut [Ve
 /// Springs are emitted row by row and reach at most two rows back, so the springs of a run of
 /// rows are a contiguous part of the spring list and touch only those rows and the two before.
 /// The rows are cut into blocks separated by two-row seams: the blocks touch disjoint points and
-/// are swept at once, each in spring order; then the seams (also disjoint from each other) are
+/// are swept at once, each in spring order (by the Verlet solver's sweep, `verlet/limit.rs`); then the seams (also disjoint from each other) are
 /// swept at once. Every spring is visited exactly once and corrected exactly as in the course;
 /// only a seam's springs come after the block above them instead of before.
 ///
@@ -82,12 +88,13 @@ pub(crate) struct StretchBands {
     seams: Vec<Band>,
 }
 
+/// A band of the stretch limit's sweep.
 #[derive(Debug, Clone)]
-struct Band {
-    /// Its range of the spring list.
-    springs: Range<usize>,
+pub(crate) struct Band {
+    /// The rows whose points emit its springs.
+    pub(crate) rows: Range<usize>,
     /// The points its springs touch.
-    points: Range<usize>,
+    pub(crate) points: Range<usize>,
 }
 
 impl StretchBands {
@@ -98,10 +105,8 @@ impl StretchBands {
     /// Cuts `mesh`'s rows into at most [`Self::BLOCKS`] blocks of at least 4 rows.
     pub(crate) fn new(mesh: &ClothMesh) -> Self {
         let (nw, nh) = (mesh.nw(), mesh.nh());
-        let springs = mesh.springs();
         let band = |r0: usize, r1: usize| Band {
-            springs: springs.partition_point(|s| (s.a as usize) < r0 * nw)
-                ..springs.partition_point(|s| (s.a as usize) < r1 * nw),
+            rows: r0..r1,
             points: r0.saturating_sub(2) * nw..r1 * nw,
         };
         // Blocks of at least 4 rows: block k + 1 then keeps seams k and k + 1 apart (each seam
@@ -121,53 +126,44 @@ impl StretchBands {
         Self { blocks: out, seams }
     }
 
-    /// The stretch limit in this band order, on `pool`'s threads (or the caller's).
-    pub(crate) fn limit(
-        &self,
-        springs: &[Spring],
-        pinned: &[bool],
-        positions: &mut [Vec3],
-        ratio: f64,
-        pool: Option<&rayon::ThreadPool>,
-    ) {
-        for bands in [&self.blocks, &self.seams] {
-            match pool {
-                Some(pool) => pool.install(|| {
-                    sweep_bands(bands, springs, pinned, positions, 0, ratio, true);
-                }),
-                None => sweep_bands(bands, springs, pinned, positions, 0, ratio, false),
-            }
-        }
+    /// The blocks, then the seams: the bands of each list touch disjoint points, and the
+    /// lists are swept one after the other.
+    pub(crate) fn phases(&self) -> [&[Band]; 2] {
+        [&self.blocks, &self.seams]
+    }
+
+    /// The most bands of one phase.
+    pub(crate) fn widest(&self) -> usize {
+        self.blocks.len().max(self.seams.len())
     }
 }
 
-/// Sweeps disjoint `bands` (in increasing order of points), splitting `positions` (which starts
-/// at point `offset`) between them; halves run in parallel when `parallel`. Recursion rather
-/// than a list of slices, so nothing is allocated.
-fn sweep_bands(
+/// Runs `sweep` on each of the disjoint `bands` (in increasing order of points) with its own
+/// `state` and its window of `positions` (which starts at point `offset`); halves run in
+/// parallel when `parallel`. Recursion rather than a list of slices, so nothing is allocated.
+pub(crate) fn for_each_band<S: Send>(
     bands: &[Band],
-    springs: &[Spring],
-    pinned: &[bool],
+    states: &mut [S],
     positions: &mut [Vec3],
     offset: usize,
-    ratio: f64,
     parallel: bool,
+    sweep: &(impl Fn(&Band, &mut S, &mut [Vec3]) + Sync),
 ) {
-    match bands {
-        [] => {}
-        [b] => limit_stretch_from(
-            &springs[b.springs.clone()],
-            &pinned[b.points.clone()],
+    match (bands, states) {
+        ([], _) | (_, []) => {}
+        ([b], [state, ..]) => sweep(
+            b,
+            state,
             &mut positions[b.points.start - offset..b.points.end - offset],
-            b.points.start,
-            ratio,
         ),
-        _ => {
-            let (left, right) = bands.split_at(bands.len() / 2);
+        (_, states) => {
+            let mid = bands.len() / 2;
+            let (left, right) = bands.split_at(mid);
+            let (left_states, right_states) = states.split_at_mut(mid.min(states.len()));
             let split = right[0].points.start;
             let (lo, hi) = positions.split_at_mut(split - offset);
-            let mut run_left = || sweep_bands(left, springs, pinned, lo, offset, ratio, parallel);
-            let mut run_right = || sweep_bands(right, springs, pinned, hi, split, ratio, parallel);
+            let mut run_left = || for_each_band(left, left_states, lo, offset, parallel, sweep);
+            let mut run_right = || for_each_band(right, right_states, hi, split, parallel, sweep);
             if parallel {
                 rayon::join(run_left, run_right);
             } else {

@@ -26,6 +26,7 @@
 //! default) steps 3 and 5 keep the course's sequential order; [`ConstraintOrder::Parallel`]
 //! trades that order for threads.
 
+mod limit;
 mod sweep;
 
 use std::sync::Arc;
@@ -39,6 +40,7 @@ use crate::{
     Collider, SolveError, Solver, SpatialHash, StepParams, StepReport, apply_colliders,
     limit_stretch,
 };
+use limit::StretchSweep;
 use sweep::{RowScratch, Stencil, SweepParams};
 
 /// The order in which the two sequential constraint passes (self-collision and the stretch
@@ -74,8 +76,8 @@ pub struct Verlet {
     hash: SpatialHash,
     /// The stretch limit's bands for [`ConstraintOrder::Parallel`], rebuilt with the stencil.
     bands: StretchBands,
-    /// Positions at the start of the parallel self-collision pass.
-    snapshot: Vec<Vec3>,
+    /// Scratch of the faithful stretch-limit sweep.
+    stretch: StretchSweep,
 }
 
 impl Verlet {
@@ -206,6 +208,9 @@ impl Solver for Verlet {
         if !self.stencil.as_ref().is_some_and(|s| s.matches(mesh)) {
             self.stencil = Some(Stencil::new(mesh)?);
             self.bands = StretchBands::new(mesh);
+            if let Some(stencil) = &self.stencil {
+                self.stretch = StretchSweep::new(stencil, MAX_STRETCH);
+            }
         }
         let pins: &[usize] = self.stencil.as_ref().map_or(&[], |s| &s.pins);
         self.pinned_last.clear();
@@ -224,8 +229,8 @@ impl Solver for Verlet {
         // 3. Self-collision.
         if params.self_collision {
             if parallel {
-                let (hash, snapshot) = (&mut self.hash, &mut self.snapshot);
-                hash.resolve_from_snapshot(mesh, positions, snapshot, params.steps_per_frame, pool);
+                self.hash
+                    .resolve_from_snapshot(mesh, positions, params.steps_per_frame, pool);
             } else {
                 self.hash.resolve(mesh, positions, params.steps_per_frame);
             }
@@ -236,10 +241,12 @@ impl Solver for Verlet {
 
         // 5. Stretch limit.
         if params.stretch_limit {
-            if parallel {
-                let (springs, pinned) = (mesh.springs(), mesh.pinned());
-                self.bands
-                    .limit(springs, pinned, positions, MAX_STRETCH, pool);
+            if let (true, Some(stencil)) = (parallel, &self.stencil) {
+                let bands = &self.bands;
+                self.stretch
+                    .limit_bands(stencil, bands, mesh.pinned(), positions, pool);
+            } else if let Some(stencil) = &self.stencil {
+                self.stretch.limit(stencil, mesh.pinned(), positions);
             } else {
                 limit_stretch(mesh.springs(), mesh.pinned(), positions, MAX_STRETCH);
             }

@@ -1,0 +1,329 @@
+//! The course's stretch-limit sweep (step 5), with the springs that provably need nothing
+//! skipped.
+//!
+//! # Why
+//!
+//! The course sweeps every spring in order, in place: later springs see earlier corrections.
+//! In a moving cloth only a few springs per sweep are over the limit, yet checking each one is a
+//! dependent chain of loads, a squared length and a branch, one spring at a time; that made the
+//! sweep a third of a step.
+//!
+//! # How, and why the result is the course's bit for bit
+//!
+//! 1. A pre-pass computes the squared length of every spring from the positions at the start of
+//!    the sweep, row by row and direction by direction on struct-of-arrays copies (so it runs on
+//!    SIMD lanes), and marks the springs not proven inside the limit. It compares with one bound
+//!    per direction, the smallest of the springs' own bounds, so it reads no rest lengths (on a
+//!    big cloth they are three times the positions' memory); the few springs between that bound
+//!    and their own get the exact check below.
+//! 2. The sequential sweep walks the springs in the course's order (point by point, the six
+//!    directions in order, exactly the spring list's order) and runs the course's check on a
+//!    spring only when it is marked or one of its ends has moved since the sweep began.
+//!
+//! A skipped spring has both ends at their start positions, so the course's check would compute
+//! the very squared length of the pre-pass (same operands, same operations) and, that length
+//! being at most the smallest [`inside_bound`] of its direction, hence at most its own, skip it
+//! too. Every other spring gets the course's
+//! check on the current positions. So the sweep makes the same corrections in the same order.
+
+// NOTE: the pre-pass helpers are `#[inline(always)]` so they are compiled into its AVX2 build.
+#![allow(clippy::inline_always)]
+
+use std::ops::Range;
+
+use cloth_mesh::Vec3;
+
+use super::sweep::{DIRECTIONS, Stencil, valid_columns};
+use crate::stretch::{Band, StretchBands, for_each_band, inside_bound, limit_one};
+
+/// The sweep's bounds and scratch memory, built for one stencil (rebuilt with it).
+#[derive(Debug, Default, Clone)]
+pub(crate) struct StretchSweep {
+    bounds: Bounds,
+    /// One per band that may run at once.
+    scratch: Vec<BandScratch>,
+}
+
+/// What every band reads.
+#[derive(Debug, Default, Clone)]
+struct Bounds {
+    /// The stretch ratio the bounds were computed for.
+    ratio: f64,
+    /// Per direction: the smallest [`inside_bound`] of its springs.
+    floor: [f64; 6],
+    /// Per point: bit `t` set when its direction-`t` spring exists.
+    exists: Vec<u8>,
+}
+
+/// Scratch memory of one band's sweep; grows once.
+#[derive(Debug, Default, Clone)]
+struct BandScratch {
+    /// Struct-of-arrays copy of the band's positions at the start of its sweep.
+    soa: [Vec<f64>; 3],
+    /// Per emitting point: bit `t` set when its direction-`t` spring exists and is not proven
+    /// inside.
+    check: Vec<u8>,
+    /// `moved[margin + i]`: point `i` of the band's window moved during this sweep. The margin
+    /// lets the sweep read the flags of partners in the first two rows without bounds tests.
+    moved: Vec<bool>,
+}
+
+impl StretchSweep {
+    /// Bounds and scratch for sweeps of `stencil`'s springs at the stretch `ratio`.
+    pub(crate) fn new(stencil: &Stencil, ratio: f64) -> Self {
+        let (nw, nh) = (stencil.nw(), stencil.nh());
+        let exists: Vec<u8> = (0..nw * nh)
+            .map(|i| exists_mask(nw, i % nw, i / nw))
+            .collect();
+        let mut floor = [f64::INFINITY; 6];
+        for (t, floor) in floor.iter_mut().enumerate() {
+            for (&rest, &mask) in stencil.rest(t).iter().zip(&exists) {
+                if mask & (1 << t) != 0 {
+                    *floor = floor.min(inside_bound(ratio * rest));
+                }
+            }
+        }
+        Self {
+            bounds: Bounds {
+                ratio,
+                floor,
+                exists,
+            },
+            scratch: Vec::new(),
+        }
+    }
+
+    /// One sweep of the stretch limit over all of `stencil`'s springs, in the course's order.
+    pub(crate) fn limit(&mut self, stencil: &Stencil, pinned: &[bool], positions: &mut [Vec3]) {
+        self.scratch.resize_with(1, BandScratch::default);
+        let rows = 0..stencil.nh();
+        self.scratch[0].sweep(&self.bounds, stencil, pinned, positions, rows);
+    }
+
+    /// The sweep in `bands`' order ([`crate::ConstraintOrder::Parallel`]): the blocks at once,
+    /// then the seams at once, each band in the course's order, on `pool`'s threads.
+    pub(crate) fn limit_bands(
+        &mut self,
+        stencil: &Stencil,
+        bands: &StretchBands,
+        pinned: &[bool],
+        positions: &mut [Vec3],
+        pool: Option<&rayon::ThreadPool>,
+    ) {
+        self.scratch
+            .resize_with(bands.widest(), BandScratch::default);
+        let bounds = &self.bounds;
+        let sweep = |band: &Band, scratch: &mut BandScratch, window: &mut [Vec3]| {
+            let pinned = &pinned[band.points.clone()];
+            scratch.sweep(bounds, stencil, pinned, window, band.rows.clone());
+        };
+        for phase in bands.phases() {
+            let scratch = &mut self.scratch[..];
+            match pool {
+                Some(pool) => {
+                    pool.install(|| for_each_band(phase, scratch, positions, 0, true, &sweep));
+                }
+                None => for_each_band(phase, scratch, positions, 0, false, &sweep),
+            }
+        }
+    }
+}
+
+impl BandScratch {
+    /// The sweep over the springs emitted by `rows`, in the course's order. `positions` and
+    /// `pinned` are the window of points those springs touch: from two rows before `rows`
+    /// (or the first row) to the end of `rows`.
+    fn sweep(
+        &mut self,
+        bounds: &Bounds,
+        stencil: &Stencil,
+        pinned: &[bool],
+        positions: &mut [Vec3],
+        rows: Range<usize>,
+    ) {
+        let nw = stencil.nw();
+        let first = rows.start.saturating_sub(2) * nw;
+        let emitters = rows.start * nw..rows.end * nw;
+        let margin = 2 * nw + 1;
+        let ratio = bounds.ratio;
+        self.check.resize(emitters.len(), 0);
+        self.moved.clear();
+        self.moved.resize(margin + positions.len(), false);
+        self.prepass(bounds, stencil, positions, first, rows);
+
+        let offsets = DIRECTIONS.map(|(dx, dy, _)| dx + dy * nw as isize);
+        let moved = &mut self.moved;
+        let exists = &bounds.exists[emitters.clone()];
+        for (k, (&check, &exists)) in self.check.iter().zip(exists).enumerate() {
+            // `j`: the emitter's index in the window; its global index is `first + j`.
+            let (j, global) = (emitters.start - first + k, emitters.start + k);
+            // Springs to look at: marked by the pre-pass, or with a partner that moved. The
+            // emitter itself cannot have moved yet: earlier springs only touch earlier points.
+            let mut look = check;
+            for (t, &off) in offsets.iter().enumerate() {
+                look |= u8::from(moved[(margin + j).wrapping_add_signed(off)]) << t;
+            }
+            look &= exists;
+            if look == 0 {
+                continue;
+            }
+            let mut emitter_moved = false;
+            for (t, &off) in offsets.iter().enumerate() {
+                // NOTE: once the emitter has moved, each of its later springs needs the check.
+                let bit = 1u8 << t;
+                if exists & bit == 0 || (look & bit == 0 && !emitter_moved) {
+                    continue;
+                }
+                let b = j.wrapping_add_signed(off);
+                let rest = stencil.rest(t)[global];
+                if limit_one(j, b, rest, pinned, positions, ratio) {
+                    emitter_moved = true;
+                    moved[margin + j] = true;
+                    moved[margin + b] = true;
+                }
+            }
+        }
+    }
+
+    /// Marks the springs emitted by `rows` that are not proven inside the limit, from the
+    /// window's current positions (the window starts at point `first`).
+    fn prepass(
+        &mut self,
+        bounds: &Bounds,
+        stencil: &Stencil,
+        positions: &[Vec3],
+        first: usize,
+        rows: Range<usize>,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, checked just above.
+            #[allow(unsafe_code)]
+            unsafe {
+                self.prepass_avx2(bounds, stencil, positions, first, rows);
+            }
+            return;
+        }
+        self.prepass_portable(bounds, stencil, positions, first, rows);
+    }
+
+    /// The pre-pass compiled for AVX2 (same operations, four lanes; see `Stencil::sweep_avx2`).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[allow(unsafe_code)]
+    #[target_feature(enable = "avx2")]
+    unsafe fn prepass_avx2(
+        &mut self,
+        bounds: &Bounds,
+        stencil: &Stencil,
+        positions: &[Vec3],
+        first: usize,
+        rows: Range<usize>,
+    ) {
+        self.prepass_portable(bounds, stencil, positions, first, rows);
+    }
+
+    #[inline(always)]
+    fn prepass_portable(
+        &mut self,
+        bounds: &Bounds,
+        stencil: &Stencil,
+        positions: &[Vec3],
+        first: usize,
+        rows: Range<usize>,
+    ) {
+        let nw = stencil.nw();
+        for (c, soa) in self.soa.iter_mut().enumerate() {
+            soa.clear();
+            soa.extend(positions.iter().map(|p| p[c]));
+        }
+        let [px, py, pz] = &self.soa;
+        for (k, y) in rows.enumerate() {
+            let row = &mut self.check[k * nw..(k + 1) * nw];
+            row.fill(0);
+            for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
+                let cols = valid_columns(nw, dx);
+                if y < (-dy) as usize || cols.is_empty() {
+                    continue;
+                }
+                let a = y * nw + cols.start - first;
+                let b = a.wrapping_add_signed(dx + dy * nw as isize);
+                let len = cols.len();
+                let floor = bounds.floor[t];
+                let (ax, ay, az) = (&px[a..a + len], &py[a..a + len], &pz[a..a + len]);
+                let (bx, by, bz) = (&px[b..b + len], &py[b..b + len], &pz[b..b + len]);
+                let out = &mut row[cols];
+                for i in 0..len {
+                    // NOTE: the course's `positions[b] - positions[a]` and `dist2`, operand for
+                    // operand, so the decision is the sequential check's.
+                    let (ddx, ddy, ddz) = (bx[i] - ax[i], by[i] - ay[i], bz[i] - az[i]);
+                    let len2 = ddx * ddx + ddy * ddy + ddz * ddz;
+                    let inside = len2 <= floor;
+                    out[i] |= u8::from(!inside) << t;
+                }
+            }
+        }
+    }
+}
+
+/// Bit `t` set when point `(x, y)` of a grid `nw` wide emits a direction-`t` spring.
+fn exists_mask(nw: usize, x: usize, y: usize) -> u8 {
+    let mut mask = 0;
+    for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
+        if valid_columns(nw, dx).contains(&x) && y >= (-dy) as usize {
+            mask |= 1 << t;
+        }
+    }
+    mask
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{MAX_STRETCH, limit_stretch, pinned_grid};
+
+    #[test]
+    fn the_sweep_makes_the_courses_corrections_bit_for_bit() {
+        // Points scattered by up to 40 % of the spacing: many springs over the limit, chains of
+        // corrections through shared points, pinned corners, and ragged rows (37 wide).
+        let mesh = pinned_grid(37).unwrap();
+        let stencil = Stencil::new(&mesh).unwrap();
+        let mut rng = cloth_mesh::SplitMix64::new(3);
+        let h = 0.4 / 49.0;
+        let start: Vec<Vec3> = mesh
+            .start_positions()
+            .iter()
+            .map(|p| p + Vec3::new(rng.uniform(-h, h), rng.uniform(-h, h), rng.uniform(-h, h)))
+            .collect();
+        let mut course = start.clone();
+        limit_stretch(mesh.springs(), mesh.pinned(), &mut course, MAX_STRETCH);
+        let mut fast = start.clone();
+        let mut sweep = StretchSweep::new(&stencil, MAX_STRETCH);
+        sweep.limit(&stencil, mesh.pinned(), &mut fast);
+        let changed = course.iter().zip(&start).filter(|(a, b)| a != b).count();
+        assert!(
+            changed > mesh.len() / 4,
+            "the test must exercise corrections"
+        );
+        for (i, (a, b)) in fast.iter().zip(&course).enumerate() {
+            for c in 0..3 {
+                assert_eq!(a[c].to_bits(), b[c].to_bits(), "point {i} axis {c}");
+            }
+        }
+        // A second sweep over the corrected cloth (reused scratch) agrees as well.
+        limit_stretch(mesh.springs(), mesh.pinned(), &mut course, MAX_STRETCH);
+        sweep.limit(&stencil, mesh.pinned(), &mut fast);
+        assert!(fast.iter().zip(&course).all(|(a, b)| a == b));
+    }
+
+    #[test]
+    fn exists_masks_count_the_meshs_springs() {
+        let mesh = pinned_grid(9).unwrap();
+        let total: u32 = (0..mesh.len())
+            .map(|i| exists_mask(9, i % 9, i / 9).count_ones())
+            .sum();
+        assert_eq!(total as usize, mesh.springs().len());
+    }
+}
