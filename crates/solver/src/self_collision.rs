@@ -8,9 +8,10 @@ use cloth_mesh::{ClothMesh, Vec3};
 /// The course keys a `std::unordered_map` by a float hash of the box. We key by the box's integer
 /// coordinates and group points with a counting sort:
 ///
-/// 1. each point's box key goes through an open-addressing table (linear probing, twice as many
-///    slots as points) that hands out dense cell numbers; slots are marked with a generation
-///    stamp, so the table is never cleared or reallocated between steps;
+/// 1. each point's box key goes through an open-addressing table (linear probing, at least
+///    twice as many slots as boxes in use) that hands out dense cell numbers, unless the point
+///    before it or the one a row up has the same key; slots are marked with a generation stamp,
+///    so the table is never cleared between steps;
 /// 2. a count per cell, a prefix sum and one placement pass lay the points out cell by cell.
 ///
 /// Every pass is linear in the number of points and, once the arrays have grown, nothing is

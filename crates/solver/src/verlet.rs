@@ -20,11 +20,12 @@
 //! # Speed
 //!
 //! Steps 1 and 2 run as one sweep over the grid's rows on struct-of-arrays row buffers
-//! (`sweep`), bit-identical to the course's spring loop and shared between threads by rows.
-//! Self-collision groups points with a linear counting sort; the stretch limit skips the square
-//! root of every spring it can prove inside the limit. With [`ConstraintOrder::Faithful`] (the
-//! default) steps 3 and 5 keep the course's sequential order; [`ConstraintOrder::Parallel`]
-//! trades that order for threads.
+//! (`sweep`), bit-identical to the course's spring loop, compiled for AVX2 when the CPU has it
+//! and shared between threads by rows. Self-collision groups points with a linear counting sort
+//! and skips boxes with no pair within reach; the stretch limit checks only the springs a
+//! vectorised pre-pass could not prove inside the limit, or with an end already moved
+//! (`limit`). With [`ConstraintOrder::Faithful`] (the default) steps 3 and 5 keep the course's
+//! sequential order and results; [`ConstraintOrder::Parallel`] trades that order for threads.
 
 mod limit;
 mod sweep;
