@@ -104,7 +104,7 @@ pub struct Args {
 
 /// Whether frame `f` (1-based; 0 is the start) of `frames` is printed.
 fn printed(f: u64, frames: u64, every: Option<u64>) -> bool {
-    f == frames || every.is_some_and(|k| f > 0 && f % k == 0)
+    f == frames || every.is_some_and(|k| f > 0 && f.is_multiple_of(k))
 }
 
 /// Runs the command.

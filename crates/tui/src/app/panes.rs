@@ -40,10 +40,10 @@ pub fn prepare(app: &mut App, area: Rect) {
         let view = app.views[slot];
         let mut spec = ViewSpec::new(view, &app.sim.scene.mesh);
         spec.orbit = app.orbit;
-        if view != View::Orbit {
-            if let Some(e) = app.extent {
-                spec.extent = Extent::Fixed(e);
-            }
+        if view != View::Orbit
+            && let Some(e) = app.extent
+        {
+            spec.extent = Extent::Fixed(e);
         }
         let frame = app.frames[slot].get_or_insert_with(|| AsciiFrame::new(size));
         if frame.size() != size {

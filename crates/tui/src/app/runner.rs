@@ -164,11 +164,11 @@ fn event_loop(terminal: &mut DefaultTerminal, app: &mut App, fps: u32) -> anyhow
             app.debt = 0.0;
             meter.lagging = true;
         }
-        if let Some(stats) = meter.take(now, budget) {
-            if stats != app.stats {
-                update(app, Message::Measured(stats));
-                dirty = true;
-            }
+        if let Some(stats) = meter.take(now, budget)
+            && stats != app.stats
+        {
+            update(app, Message::Measured(stats));
+            dirty = true;
         }
 
         let now = Instant::now();
