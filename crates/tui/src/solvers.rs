@@ -8,7 +8,10 @@ use cloth_solver::{Solver, SolverKind, Verlet};
 /// When `kind` is not compiled into this binary (the `implicit` cargo feature is off).
 #[cfg_attr(
     feature = "implicit",
-    allow(clippy::unnecessary_wraps, reason = "it fails when the implicit feature is off")
+    allow(
+        clippy::unnecessary_wraps,
+        reason = "it fails when the implicit feature is off"
+    )
 )]
 pub fn build(kind: SolverKind) -> anyhow::Result<Box<dyn Solver>> {
     match kind {
