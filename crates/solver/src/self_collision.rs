@@ -52,18 +52,78 @@ pub(crate) fn dist2(d: &Vec3) -> f64 {
     d.x * d.x + d.y * d.y + d.z * d.z
 }
 
-/// `floor(v)` as an integer, for box indices.
+/// One axis of a box key: `floor(v) + 2^20`, wrapped to 21 bits, for `v` the coordinate in
+/// box sizes.
 ///
-/// NOTE: `f64::floor` is a libm call on baseline x86-64 (no SSE4.1) and was 4 % of a step.
-/// Truncate-and-correct gives the same integer for every |v| < 2^53; beyond that (a point
-/// millions of boxes away) the box index may differ by one, which only changes which far-away
-/// points share a box, never a correction, because such points are far beyond `2 * thickness`.
-#[inline]
-fn floor_to_i64(v: f64) -> i64 {
-    let t = v as i64;
-    // NOTE: wrapping: a diverged (huge or infinite) coordinate saturates `t`, and must not
-    // overflow here; any box will do for it, the step reports the non-finite state.
-    t.wrapping_sub(i64::from((t as f64) > v))
+/// NOTE: written with plain float adds and integer bit operations, not `f64::floor` (a libm
+/// call on baseline x86-64) or an `as i64` cast (no AVX2 instruction for it), so the key pass
+/// runs on SIMD lanes. Adding `1.5 * 2^52` rounds `v` to the nearest integer and leaves that
+/// integer, in two's complement, in the low mantissa bits; one is taken off where rounding went
+/// up. That is `floor(v)` exactly for every |v| < 2^51. Beyond (a point a million boxes away, or
+/// a non-finite one) the key is some box: such points are far beyond `2 * thickness` of any
+/// other, and a diverged step is reported by the solver anyway.
+#[inline(always)]
+#[allow(clippy::inline_always)]
+fn box_bits(v: f64) -> u64 {
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    let m = v + ROUND;
+    let rounded_up = m - ROUND > v;
+    m.to_bits()
+        .wrapping_sub(u64::from(rounded_up))
+        .wrapping_add(1 << 20)
+        & 0x1F_FFFF
+}
+
+/// The box key of every point into `keys` (see [`SpatialHash::key`]).
+#[inline(always)]
+#[allow(clippy::inline_always)]
+fn keys_portable(keys: &mut [u64], positions: &[Vec3], size: (f64, f64, f64)) {
+    for (k, p) in keys.iter_mut().zip(positions) {
+        *k = SpatialHash::key(p, size);
+    }
+}
+
+/// [`keys_portable`] compiled for AVX2: four points' divisions and bit operations at once, the
+/// same operations, so the same keys.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx2")]
+unsafe fn keys_avx2(keys: &mut [u64], positions: &[Vec3], size: (f64, f64, f64)) {
+    keys_portable(keys, positions, size);
+}
+
+/// The box key of every point into `keys`, on `pool`'s threads when there is one.
+fn compute_keys(
+    keys: &mut [u64],
+    positions: &[Vec3],
+    size: (f64, f64, f64),
+    pool: Option<&rayon::ThreadPool>,
+) {
+    use rayon::prelude::*;
+    const CHUNK: usize = 8192;
+    let run = |keys: &mut [u64], positions: &[Vec3]| {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, checked just above.
+            #[allow(unsafe_code)]
+            unsafe {
+                keys_avx2(keys, positions, size);
+            }
+            return;
+        }
+        keys_portable(keys, positions, size);
+    };
+    match pool {
+        Some(pool) if keys.len() > CHUNK => pool.install(|| {
+            keys.par_chunks_mut(CHUNK)
+                .zip(positions.par_chunks(CHUNK))
+                .for_each(|(k, p)| run(k, p));
+        }),
+        _ => run(keys, positions),
+    }
 }
 
 impl SpatialHash {
@@ -76,19 +136,32 @@ impl SpatialHash {
         (w, h, w.max(h))
     }
 
-    #[inline]
+    /// The key of `p`'s box: its integer box coordinates, 21 bits per axis.
+    #[inline(always)]
+    #[allow(clippy::inline_always)]
     fn key(p: &Vec3, (w, h, t): (f64, f64, f64)) -> u64 {
-        // 21 bits per axis, offset so negative boxes stay distinct; a box index beyond +-2^20
-        // (a cloth a million boxes away) wraps, which only merges far-apart boxes: harmless,
-        // the distance test still rejects the pairs.
-        let q = |v: f64, s: f64| floor_to_i64(v / s).wrapping_add(1 << 20) as u64 & 0x1F_FFFF;
-        (q(p.x, w) << 42) | (q(p.y, h) << 21) | q(p.z, t)
+        // Offset so negative boxes stay distinct; a box index beyond +-2^20 (a cloth a million
+        // boxes away) wraps, which only merges far-apart boxes: harmless, the distance test
+        // still rejects the pairs.
+        (box_bits(p.x / w) << 42) | (box_bits(p.y / h) << 21) | box_bits(p.z / t)
     }
 
     /// Rebuilds the hash from `positions`.
     pub fn rebuild(&mut self, mesh: &ClothMesh, positions: &[Vec3]) {
+        self.rebuild_in(mesh, positions, None);
+    }
+
+    /// [`SpatialHash::rebuild`], with the key pass on `pool`'s threads when there is one.
+    fn rebuild_in(
+        &mut self,
+        mesh: &ClothMesh,
+        positions: &[Vec3],
+        pool: Option<&rayon::ThreadPool>,
+    ) {
         let size = Self::box_size(mesh);
         let n = positions.len();
+        self.key_of.resize(n, 0);
+        compute_keys(&mut self.key_of, positions, size, pool);
         // NOTE: a load factor of at most 1/2 keeps linear-probing chains short. The table is
         // sized to the number of boxes in use (about a ninth of the points on a smooth cloth),
         // not to the points: a big cloth's table then stays in cache. It doubles, and the
@@ -100,7 +173,7 @@ impl SpatialHash {
         }
         loop {
             self.clear_table(table);
-            if self.assign_cells(mesh.nw(), positions, size) {
+            if self.assign_cells(mesh.nw()) {
                 break;
             }
             table *= 2;
@@ -118,12 +191,30 @@ impl SpatialHash {
         self.members.resize(n, 0);
         self.slot_of.resize(n, 0);
         self.sorted.resize(n, Vec3::zeros());
-        for (i, &c) in self.cell_of.iter().enumerate() {
-            let s = &mut self.start[c as usize];
-            self.members[*s as usize] = i as u32;
-            self.slot_of[i] = *s;
-            self.sorted[*s as usize] = positions[i];
-            *s += 1;
+        // NOTE: local slices, so the compiler knows the stores into one array do not change the
+        // others' pointers; and runs of points in one cell take consecutive slots from a
+        // register rather than from a counter in memory (see `assign_cells`).
+        let (start, members, sorted) = (
+            &mut self.start[..],
+            &mut self.members[..],
+            &mut self.sorted[..],
+        );
+        let (cell_of, slot_of) = (&self.cell_of[..], &mut self.slot_of[..]);
+        let mut i = 0;
+        while i < n {
+            let c = cell_of[i] as usize;
+            let mut s = start[c];
+            loop {
+                members[s as usize] = i as u32;
+                slot_of[i] = s;
+                sorted[s as usize] = positions[i];
+                s += 1;
+                i += 1;
+                if i == n || cell_of[i] as usize != c {
+                    break;
+                }
+            }
+            start[c] = s;
         }
         self.start.rotate_right(1);
         self.start[0] = 0;
@@ -144,62 +235,51 @@ impl SpatialHash {
         }
     }
 
-    /// Gives every point the cell of its box (cells numbered in order of first appearance) and
-    /// counts the points per cell into `start`; false, with the work abandoned, when the boxes
-    /// fill more than half the table.
-    fn assign_cells(&mut self, nw: usize, positions: &[Vec3], size: (f64, f64, f64)) -> bool {
-        let n = positions.len();
+    /// Gives every point the cell of its box key (cells numbered in order of first appearance)
+    /// and counts the points per cell into `start`; false, with the work abandoned, when the
+    /// boxes fill more than half the table.
+    fn assign_cells(&mut self, nw: usize) -> bool {
+        let n = self.key_of.len();
         let table = self.slots.len();
         let shift = 64 - table.trailing_zeros();
         let mask = table - 1;
         self.cell_of.resize(n, 0);
-        self.key_of.resize(n, 0);
         self.start.clear();
-        for (i, p) in positions.iter().enumerate() {
-            let key = Self::key(p, size);
-            self.key_of[i] = key;
+        let (keys, cell_of, start) = (&self.key_of[..], &mut self.cell_of[..], &mut self.start);
+        let (slots, stamp) = (&mut self.slots[..], self.stamp);
+        // NOTE: runs of points in one box are counted in a register and added at the run's end:
+        // a memory counter bumped point after point waits for its own previous store.
+        let (mut run_cell, mut run_len) = (0u32, 0u32);
+        for i in 0..n {
+            let key = keys[i];
             // NOTE: boxes are three spacings wide, so most points share the box of the point
             // before them or of the one a row up. Taking the cell from them skips the probe
             // (a cache miss on a big cloth) and hands out the same cell as the table would: a
             // key seen before is in the table with that cell.
-            let cell = if i >= 1 && self.key_of[i - 1] == key {
-                self.cell_of[i - 1]
-            } else if i >= nw && self.key_of[i - nw] == key {
-                self.cell_of[i - nw]
+            if i >= 1 && keys[i - 1] == key {
+                cell_of[i] = run_cell;
+                run_len += 1;
+                continue;
+            }
+            let cell = if i >= nw && keys[i - nw] == key {
+                cell_of[i - nw]
             } else {
-                let cell = self.probe(key, shift, mask);
-                if 2 * self.start.len() > table {
+                let cell = probe(slots, stamp, start, key, shift, mask);
+                if 2 * start.len() > table {
                     return false;
                 }
                 cell
             };
-            self.cell_of[i] = cell;
-            self.start[cell as usize] += 1;
+            if run_len > 0 {
+                start[run_cell as usize] += run_len;
+            }
+            cell_of[i] = cell;
+            (run_cell, run_len) = (cell, 1);
+        }
+        if run_len > 0 {
+            start[run_cell as usize] += run_len;
         }
         true
-    }
-
-    /// The cell of `key`, from the open-addressing table (a new cell when the key is new).
-    #[inline]
-    fn probe(&mut self, key: u64, shift: u32, mask: usize) -> u32 {
-        // Fibonacci hashing: the top bits of key * 2^64/phi spread neighbouring boxes.
-        let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
-        loop {
-            let s = &mut self.slots[slot];
-            if s.stamp != self.stamp {
-                *s = Slot {
-                    key,
-                    cell: self.start.len() as u32,
-                    stamp: self.stamp,
-                };
-                self.start.push(0);
-                return s.cell;
-            }
-            if s.key == key {
-                return s.cell;
-            }
-            slot = (slot + 1) & mask;
-        }
     }
 
     /// The points in point `i`'s box (including `i`), in index order, as of the last rebuild.
@@ -301,6 +381,37 @@ impl SpatialHash {
                 .enumerate()
                 .for_each(|(c, out)| correct(c, out)),
         }
+    }
+}
+
+/// The cell of `key`, from the open-addressing table `slots` (a new cell, counted in `start`,
+/// when the key is new).
+#[inline]
+fn probe(
+    slots: &mut [Slot],
+    stamp: u32,
+    start: &mut Vec<u32>,
+    key: u64,
+    shift: u32,
+    mask: usize,
+) -> u32 {
+    // Fibonacci hashing: the top bits of key * 2^64/phi spread neighbouring boxes.
+    let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
+    loop {
+        let s = &mut slots[slot];
+        if s.stamp != stamp {
+            *s = Slot {
+                key,
+                cell: start.len() as u32,
+                stamp,
+            };
+            start.push(0);
+            return s.cell;
+        }
+        if s.key == key {
+            return s.cell;
+        }
+        slot = (slot + 1) & mask;
     }
 }
 
@@ -459,11 +570,56 @@ mod tests {
     }
 
     #[test]
-    fn integer_floor_matches_floor() {
+    fn box_bits_are_the_floor_offset_and_wrapped_to_21_bits() {
+        let expected = |v: f64| ((v.floor() as i64 + (1 << 20)) as u64) & 0x1F_FFFF;
         for v in [
-            -2.5, -2.0, -1e-300, -0.0, 0.0, 0.3, 1.0, 7.999_999, -7.000_001,
+            -2.5,
+            -2.0,
+            -1e-300,
+            -0.0,
+            0.0,
+            0.3,
+            0.5,
+            1.5,
+            2.5,
+            -0.5,
+            -1.5,
+            1.0,
+            7.999_999,
+            -7.000_001,
+            1_048_575.9,
+            1_048_576.0,
+            -1_048_577.2,
+            3.0e9 + 0.5,
+            -(2f64.powi(50)) - 0.5,
+            2f64.powi(51) - 1.0,
         ] {
-            assert_eq!(floor_to_i64(v), v.floor() as i64, "{v}");
+            assert_eq!(box_bits(v), expected(v), "{v}");
         }
+        // Every value between two integers, on a fine grid.
+        for k in -4000..4000 {
+            let v = f64::from(k) / 64.0 + 1e-3;
+            assert_eq!(box_bits(v), expected(v), "{v}");
+        }
+    }
+
+    #[test]
+    fn the_avx2_key_pass_gives_the_portable_keys() {
+        let mut rng = cloth_mesh::SplitMix64::new(9);
+        let positions: Vec<Vec3> = (0..1001)
+            .map(|_| {
+                Vec3::new(
+                    rng.uniform(-3.0, 3.0),
+                    rng.uniform(-3.0, 3.0),
+                    rng.uniform(-3.0, 3.0),
+                )
+            })
+            .collect();
+        let size = (0.06, 0.05, 0.06);
+        let mut portable = vec![0; positions.len()];
+        keys_portable(&mut portable, &positions, size);
+        let mut dispatched = vec![1; positions.len()];
+        compute_keys(&mut dispatched, &positions, size, None);
+        assert_eq!(portable, dispatched);
     }
 }
