@@ -305,7 +305,19 @@ impl SpatialHash {
     /// Points are treated in index order and each one sees the already-corrected positions of
     /// those before it, as in the course; the hash itself is built before any correction.
     pub fn resolve(&mut self, mesh: &ClothMesh, positions: &mut [Vec3], steps_per_frame: u32) {
-        self.rebuild(mesh, positions);
+        self.resolve_in(mesh, positions, steps_per_frame, None);
+    }
+
+    /// [`SpatialHash::resolve`] with its boxes shared out among `pool`'s threads when there is
+    /// one: the same corrections, bit for bit, on any number of threads.
+    pub(crate) fn resolve_in(
+        &mut self,
+        mesh: &ClothMesh,
+        positions: &mut [Vec3],
+        steps_per_frame: u32,
+        pool: Option<&rayon::ThreadPool>,
+    ) {
+        self.rebuild_in(mesh, positions, pool);
         let repulsion = Repulsion::new(mesh, steps_per_frame);
         let pinned = mesh.pinned();
         // NOTE: a point's correction reads only the points of its own box, and only the
@@ -313,23 +325,44 @@ impl SpatialHash {
         // box's points in index order, makes exactly the corrections of the course's sweep over
         // all points in index order. That lets a box with no pair within reach at the start of
         // the pass (most of them) be skipped after one look at each pair, half the work of
-        // asking every point about every other.
-        for c in 0..self.start.len() - 1 {
-            let range = self.start[c] as usize..self.start[c + 1] as usize;
-            if !repulsion.any_pair_within_reach(&self.sorted[range.clone()]) {
-                continue;
+        // asking every point about every other; and it lets threads take whole boxes.
+        let cells = self.start.len() - 1;
+        match pool {
+            None => {
+                for c in 0..cells {
+                    let range = self.start[c] as usize..self.start[c + 1] as usize;
+                    let members = &self.members[range.clone()];
+                    resolve_box(
+                        &repulsion,
+                        pinned,
+                        members,
+                        &mut self.sorted[range],
+                        |i, p| {
+                            positions[i] = p;
+                        },
+                    );
+                }
             }
-            for slot in range.clone() {
-                let i = self.members[slot] as usize;
-                if pinned[i] {
-                    continue;
-                }
-                let members = &self.sorted[range.clone()];
-                if let Some(p) = repulsion.corrected(members, slot - range.start) {
-                    // NOTE: `sorted` mirrors `positions`: later points see this correction.
-                    positions[i] = p;
-                    self.sorted[slot] = p;
-                }
+            Some(pool) => {
+                // The boxes correct `sorted` (their own contiguous runs) in parallel; then every
+                // point takes its position back from its slot, corrected or not.
+                let (start, members) = (&self.start[..], &self.members[..]);
+                let sorted = &mut self.sorted[..];
+                pool.install(|| {
+                    resolve_boxes(&repulsion, pinned, start, members, sorted, 0..cells, 0);
+                });
+                let (sorted, slot_of) = (&self.sorted[..], &self.slot_of[..]);
+                pool.install(|| {
+                    use rayon::prelude::*;
+                    positions
+                        .par_chunks_mut(PARALLEL_CHUNK)
+                        .zip(slot_of.par_chunks(PARALLEL_CHUNK))
+                        .for_each(|(out, slots)| {
+                            for (p, &s) in out.iter_mut().zip(slots) {
+                                *p = sorted[s as usize];
+                            }
+                        });
+                });
             }
         }
     }
@@ -348,10 +381,9 @@ impl SpatialHash {
         pool: Option<&rayon::ThreadPool>,
     ) {
         use rayon::prelude::*;
-        // Chunks of a few thousand points amortise rayon's task cost; the result does not
-        // depend on the chunking or the thread count.
-        const CHUNK: usize = 4096;
-        self.rebuild(mesh, positions);
+        // The result does not depend on the chunking or the thread count.
+        const CHUNK: usize = PARALLEL_CHUNK;
+        self.rebuild_in(mesh, positions, pool);
         let repulsion = Repulsion::new(mesh, steps_per_frame);
         let pinned = mesh.pinned();
         // NOTE: `sorted` holds the positions at the start of the pass and is never written
@@ -413,6 +445,95 @@ fn probe(
         }
         slot = (slot + 1) & mask;
     }
+}
+
+/// Points a thread takes at once in the threaded passes: enough to amortise rayon's task cost.
+const PARALLEL_CHUNK: usize = 4096;
+
+/// Resolves one box in place: `box_points` are its points' positions in index order (a run of
+/// `sorted`) and `members` their indices; `moved(i, p)` hears of each corrected point.
+#[inline]
+fn resolve_box(
+    repulsion: &Repulsion,
+    pinned: &[bool],
+    members: &[u32],
+    box_points: &mut [Vec3],
+    mut moved: impl FnMut(usize, Vec3),
+) {
+    if !repulsion.any_pair_within_reach(box_points) {
+        return;
+    }
+    for (k, &i) in members.iter().enumerate() {
+        let i = i as usize;
+        if pinned[i] {
+            continue;
+        }
+        if let Some(p) = repulsion.corrected(box_points, k) {
+            // NOTE: later points of the box see this correction, as in the course.
+            box_points[k] = p;
+            moved(i, p);
+        }
+    }
+}
+
+/// Resolves `cells` (whose points are `sorted`, a window starting at slot `offset`), halving
+/// the run of boxes between threads down to about [`PARALLEL_CHUNK`] points. Recursion rather
+/// than a list of chunks, so nothing is allocated.
+fn resolve_boxes(
+    repulsion: &Repulsion,
+    pinned: &[bool],
+    start: &[u32],
+    members: &[u32],
+    sorted: &mut [Vec3],
+    cells: std::ops::Range<usize>,
+    offset: usize,
+) {
+    let (lo, hi) = (start[cells.start] as usize, start[cells.end] as usize);
+    if hi - lo <= PARALLEL_CHUNK || cells.len() < 2 {
+        for c in cells {
+            let range = start[c] as usize..start[c + 1] as usize;
+            let window = range.start - offset..range.end - offset;
+            resolve_box(
+                repulsion,
+                pinned,
+                &members[range],
+                &mut sorted[window],
+                |_, _| {},
+            );
+        }
+        return;
+    }
+    // Split at the first box starting in the second half of the points (always inside the run:
+    // the run has two boxes or more).
+    let half = usize::midpoint(lo, hi);
+    let mid = (cells.start + start[cells.clone()].partition_point(|&s| (s as usize) <= half))
+        .clamp(cells.start + 1, cells.end - 1);
+    let split = start[mid] as usize;
+    let (left, right) = sorted.split_at_mut(split - offset);
+    rayon::join(
+        || {
+            resolve_boxes(
+                repulsion,
+                pinned,
+                start,
+                members,
+                left,
+                cells.start..mid,
+                offset,
+            );
+        },
+        || {
+            resolve_boxes(
+                repulsion,
+                pinned,
+                start,
+                members,
+                right,
+                mid..cells.end,
+                split,
+            );
+        },
+    );
 }
 
 /// The course's repulsion between points of a box.
@@ -563,6 +684,43 @@ mod tests {
         let moved = course.iter().zip(&start).filter(|(a, b)| a != b).count();
         assert!(moved > mesh.len() / 2, "the test must exercise corrections");
         for (i, (a, b)) in fast.iter().zip(&course).enumerate() {
+            for c in 0..3 {
+                assert_eq!(a[c].to_bits(), b[c].to_bits(), "point {i} axis {c}");
+            }
+        }
+    }
+
+    #[test]
+    fn threads_make_the_same_corrections_bit_for_bit() {
+        // 20,000 points crumpled into a 12 cm cube: many boxes with pairs in reach, split
+        // between tasks at several places.
+        let mesh = ClothMesh::new(&GridSpec {
+            num_width_points: 200,
+            num_height_points: 100,
+            ..GridSpec::default()
+        })
+        .unwrap();
+        let mut rng = cloth_mesh::SplitMix64::new(13);
+        let start: Vec<Vec3> = (0..mesh.len())
+            .map(|_| {
+                Vec3::new(
+                    rng.uniform(0.0, 0.12),
+                    rng.uniform(0.0, 0.12),
+                    rng.uniform(0.0, 0.12),
+                )
+            })
+            .collect();
+        let mut one = start.clone();
+        SpatialHash::default().resolve(&mesh, &mut one, 30);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        let mut three = start.clone();
+        SpatialHash::default().resolve_in(&mesh, &mut three, 30, Some(&pool));
+        let moved = one.iter().zip(&start).filter(|(a, b)| a != b).count();
+        assert!(moved > mesh.len() / 4, "the test must exercise corrections");
+        for (i, (a, b)) in one.iter().zip(&three).enumerate() {
             for c in 0..3 {
                 assert_eq!(a[c].to_bits(), b[c].to_bits(), "point {i} axis {c}");
             }

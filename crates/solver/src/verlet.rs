@@ -50,7 +50,8 @@ use sweep::{RowScratch, Stencil, SweepParams};
 pub enum ConstraintOrder {
     /// The course's order: one in-place sweep in spring order for the stretch limit, points in
     /// index order each seeing earlier corrections for self-collision. Results are the course's.
-    /// These two passes then run on one thread whatever [`Verlet::with_threads`] says.
+    /// Self-collision still shares its boxes out among the threads (boxes are independent, so
+    /// that changes no bit); the stretch limit's sweep runs on one thread.
     #[default]
     Faithful,
     /// An order that threads can share. Self-collision computes every point's correction from
@@ -88,9 +89,9 @@ impl Verlet {
         Self::default()
     }
 
-    /// Runs the force and integration sweep on `threads` worker threads (1 or 0: the caller's
-    /// thread). The results are bit-identical for any thread count; the constraint passes share
-    /// the threads only with [`ConstraintOrder::Parallel`].
+    /// Runs the force and integration sweep and self-collision on `threads` worker threads (1 or
+    /// 0: the caller's thread). The results are bit-identical for any thread count; the stretch
+    /// limit shares the threads only with [`ConstraintOrder::Parallel`].
     ///
     /// # Errors
     /// [`SolveError::Method`] when the thread pool cannot be created.
@@ -233,7 +234,8 @@ impl Solver for Verlet {
                 self.hash
                     .resolve_from_snapshot(mesh, positions, params.steps_per_frame, pool);
             } else {
-                self.hash.resolve(mesh, positions, params.steps_per_frame);
+                self.hash
+                    .resolve_in(mesh, positions, params.steps_per_frame, pool);
             }
         }
 
