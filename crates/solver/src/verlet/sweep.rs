@@ -88,6 +88,8 @@ pub(crate) struct RowScratch {
     f: Vec<f64>,
     /// Summed force of the row being integrated, `total[c * nw + x]`.
     total: Vec<f64>,
+    /// A row of zero forces, standing for the springs of rows past the last one.
+    zeros: Vec<f64>,
 }
 
 impl Stencil {
@@ -231,6 +233,7 @@ impl Stencil {
         scratch.pos.resize(3 * 3 * stride, 0.0);
         scratch.f.resize(3 * 6 * 3 * stride, 0.0);
         scratch.total.resize(3 * nw, 0.0);
+        scratch.zeros.resize(nw, 0.0);
         for y in r0.saturating_sub(2)..r0 {
             self.load_row(scratch, positions, y);
         }
@@ -321,23 +324,29 @@ impl Stencil {
         for c in 0..3 {
             let total = &mut scratch.total[c * nw..(c + 1) * nw];
             let [o0, o1, o2, o3, o4, o5] = [0, 1, 2, 3, 4, 5].map(|t| term(r, t, c, 0));
-            let w = params.weight[c];
-            for (x, out) in total.iter_mut().enumerate() {
-                *out = w + o0[x] + o1[x] + o2[x] + o3[x] + o4[x] + o5[x];
-            }
-            let far = [
+            let [f0, f1, f2, f3, f4, f5] = [
                 term(r, 0, c, 1),
                 term(r, 4, c, 2),
                 term(r + 1, 3, c, -1),
                 term(r + 1, 1, c, 0),
                 term(r + 1, 2, c, 1),
                 term(r + 2, 5, c, 0),
-            ];
-            // An empty term is a row past the end: no springs, nothing to subtract.
-            for t in far.into_iter().filter(|t| !t.is_empty()) {
-                for (out, v) in total.iter_mut().zip(t) {
-                    *out -= v;
-                }
+            ]
+            // A row past the end emits nothing: subtracting +0.0 leaves every sum unchanged.
+            .map(|t| if t.is_empty() { &scratch.zeros[..nw] } else { &t[..nw] });
+            let [o0, o1, o2, o3, o4, o5] = [o0, o1, o2, o3, o4, o5].map(|t| &t[..nw]);
+            let w = params.weight[c];
+            // NOTE: one pass, left to right: the same operations in the same order as adding
+            // the own terms and then subtracting the far ones, without storing and reloading
+            // the partial sums six more times.
+            for (x, out) in total.iter_mut().enumerate() {
+                *out = w + o0[x] + o1[x] + o2[x] + o3[x] + o4[x] + o5[x]
+                    - f0[x]
+                    - f1[x]
+                    - f2[x]
+                    - f3[x]
+                    - f4[x]
+                    - f5[x];
             }
         }
     }
