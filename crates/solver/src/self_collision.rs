@@ -366,54 +366,6 @@ impl SpatialHash {
             }
         }
     }
-
-    /// [`SpatialHash::resolve`] in an order threads can share ([`ConstraintOrder::Parallel`]):
-    /// every point's correction is computed from the positions at the start of the pass
-    /// (kept in the hash's cell-ordered copy), rather than from the already-corrected positions
-    /// of the points before it. The pairs, the repulsion and its averaging are the course's.
-    ///
-    /// [`ConstraintOrder::Parallel`]: crate::ConstraintOrder::Parallel
-    pub(crate) fn resolve_from_snapshot(
-        &mut self,
-        mesh: &ClothMesh,
-        positions: &mut [Vec3],
-        steps_per_frame: u32,
-        pool: Option<&rayon::ThreadPool>,
-    ) {
-        use rayon::prelude::*;
-        // The result does not depend on the chunking or the thread count.
-        const CHUNK: usize = PARALLEL_CHUNK;
-        self.rebuild_in(mesh, positions, pool);
-        let repulsion = Repulsion::new(mesh, steps_per_frame);
-        let pinned = mesh.pinned();
-        // NOTE: `sorted` holds the positions at the start of the pass and is never written
-        // during it, so it is the snapshot the corrections are computed from.
-        let hash = &*self;
-        let correct = |c: usize, out: &mut [Vec3]| {
-            for (k, p) in out.iter_mut().enumerate() {
-                let i = c * CHUNK + k;
-                if !pinned[i] {
-                    let (range, slot) = (hash.cell_range(i), hash.slot_of[i] as usize);
-                    let members = &hash.sorted[range.clone()];
-                    if let Some(q) = repulsion.corrected(members, slot - range.start) {
-                        *p = q;
-                    }
-                }
-            }
-        };
-        match pool {
-            Some(pool) => pool.install(|| {
-                positions
-                    .par_chunks_mut(CHUNK)
-                    .enumerate()
-                    .for_each(|(c, out)| correct(c, out));
-            }),
-            None => positions
-                .chunks_mut(CHUNK)
-                .enumerate()
-                .for_each(|(c, out)| correct(c, out)),
-        }
-    }
 }
 
 /// The cell of `key`, from the open-addressing table `slots` (a new cell, counted in `start`,

@@ -54,12 +54,12 @@ pub enum ConstraintOrder {
     /// that changes no bit); the stretch limit's sweep runs on one thread.
     #[default]
     Faithful,
-    /// An order that threads can share. Self-collision computes every point's correction from
-    /// the positions at the start of the pass (Jacobi) instead of in place (Gauss-Seidel); the
-    /// stretch limit sweeps row blocks at once, then the two-row seams between them. Every pair
-    /// and spring is treated once with the course's formulas, so the constraints are the same;
-    /// only the order of the corrections differs, which moves a settled cloth by far less than
-    /// its thickness (see the solver's tests). Results do not depend on the thread count.
+    /// An order that threads can share: the stretch limit sweeps row blocks at once, then the
+    /// two-row seams between them. Every spring is treated once with the course's formula, so
+    /// the constraint is the same; only the order of the corrections differs, which moves a
+    /// settled cloth by far less than its thickness (see the solver's tests). Self-collision is
+    /// the faithful one (its boxes are independent, so threads share it exactly). Results do
+    /// not depend on the thread count.
     Parallel,
 }
 
@@ -230,13 +230,8 @@ impl Solver for Verlet {
 
         // 3. Self-collision.
         if params.self_collision {
-            if parallel {
-                self.hash
-                    .resolve_from_snapshot(mesh, positions, params.steps_per_frame, pool);
-            } else {
-                self.hash
-                    .resolve_in(mesh, positions, params.steps_per_frame, pool);
-            }
+            self.hash
+                .resolve_in(mesh, positions, params.steps_per_frame, pool);
         }
 
         // 4. Collision objects.

@@ -333,7 +333,13 @@ impl Stencil {
                 term(r + 2, 5, c, 0),
             ]
             // A row past the end emits nothing: subtracting +0.0 leaves every sum unchanged.
-            .map(|t| if t.is_empty() { &scratch.zeros[..nw] } else { &t[..nw] });
+            .map(|t| {
+                if t.is_empty() {
+                    &scratch.zeros[..nw]
+                } else {
+                    &t[..nw]
+                }
+            });
             let [o0, o1, o2, o3, o4, o5] = [o0, o1, o2, o3, o4, o5].map(|t| &t[..nw]);
             let w = params.weight[c];
             // NOTE: one pass, left to right: the same operations in the same order as adding
