@@ -37,6 +37,8 @@ pub struct SpatialHash {
     slots: Vec<Slot>,
     /// The current generation; bumped by every rebuild.
     stamp: u32,
+    /// Per cell: the threaded pass moved one of its points.
+    touched: Vec<bool>,
 }
 
 #[derive(Debug, Default, Clone, Copy)]
@@ -344,25 +346,28 @@ impl SpatialHash {
                 }
             }
             Some(pool) => {
-                // The boxes correct `sorted` (their own contiguous runs) in parallel; then every
-                // point takes its position back from its slot, corrected or not.
+                // The boxes correct `sorted` (their own contiguous runs) in parallel and mark
+                // themselves when they moved a point; then the points of the marked boxes (few)
+                // take their positions back from their slots.
+                self.touched.clear();
+                self.touched.resize(cells, false);
                 let (start, members) = (&self.start[..], &self.members[..]);
-                let sorted = &mut self.sorted[..];
+                let (sorted, touched) = (&mut self.sorted[..], &mut self.touched[..]);
                 pool.install(|| {
-                    resolve_boxes(&repulsion, pinned, start, members, sorted, 0..cells, 0);
+                    let boxes = Boxes {
+                        repulsion: &repulsion,
+                        pinned,
+                        start,
+                        members,
+                    };
+                    boxes.resolve(sorted, touched, 0..cells, 0);
                 });
-                let (sorted, slot_of) = (&self.sorted[..], &self.slot_of[..]);
-                pool.install(|| {
-                    use rayon::prelude::*;
-                    positions
-                        .par_chunks_mut(PARALLEL_CHUNK)
-                        .zip(slot_of.par_chunks(PARALLEL_CHUNK))
-                        .for_each(|(out, slots)| {
-                            for (p, &s) in out.iter_mut().zip(slots) {
-                                *p = sorted[s as usize];
-                            }
-                        });
-                });
+                for (c, _) in self.touched.iter().enumerate().filter(|(_, t)| **t) {
+                    let range = self.start[c] as usize..self.start[c + 1] as usize;
+                    for (&i, p) in self.members[range.clone()].iter().zip(&self.sorted[range]) {
+                        positions[i as usize] = *p;
+                    }
+                }
             }
         }
     }
@@ -403,7 +408,8 @@ fn probe(
 const PARALLEL_CHUNK: usize = 4096;
 
 /// Resolves one box in place: `box_points` are its points' positions in index order (a run of
-/// `sorted`) and `members` their indices; `moved(i, p)` hears of each corrected point.
+/// `sorted`) and `members` their indices; `moved(i, p)` hears of each corrected point. True
+/// when some point moved.
 #[inline]
 fn resolve_box(
     repulsion: &Repulsion,
@@ -411,10 +417,11 @@ fn resolve_box(
     members: &[u32],
     box_points: &mut [Vec3],
     mut moved: impl FnMut(usize, Vec3),
-) {
+) -> bool {
     if !repulsion.any_pair_within_reach(box_points) {
-        return;
+        return false;
     }
+    let mut any = false;
     for (k, &i) in members.iter().enumerate() {
         let i = i as usize;
         if pinned[i] {
@@ -424,68 +431,62 @@ fn resolve_box(
             // NOTE: later points of the box see this correction, as in the course.
             box_points[k] = p;
             moved(i, p);
+            any = true;
         }
     }
+    any
 }
 
-/// Resolves `cells` (whose points are `sorted`, a window starting at slot `offset`), halving
-/// the run of boxes between threads down to about [`PARALLEL_CHUNK`] points. Recursion rather
-/// than a list of chunks, so nothing is allocated.
-fn resolve_boxes(
-    repulsion: &Repulsion,
-    pinned: &[bool],
-    start: &[u32],
-    members: &[u32],
-    sorted: &mut [Vec3],
-    cells: std::ops::Range<usize>,
-    offset: usize,
-) {
-    let (lo, hi) = (start[cells.start] as usize, start[cells.end] as usize);
-    if hi - lo <= PARALLEL_CHUNK || cells.len() < 2 {
-        for c in cells {
-            let range = start[c] as usize..start[c + 1] as usize;
-            let window = range.start - offset..range.end - offset;
-            resolve_box(
-                repulsion,
-                pinned,
-                &members[range],
-                &mut sorted[window],
-                |_, _| {},
-            );
+/// What the threaded self-collision pass shares between its tasks.
+struct Boxes<'a> {
+    repulsion: &'a Repulsion,
+    pinned: &'a [bool],
+    start: &'a [u32],
+    members: &'a [u32],
+}
+
+impl Boxes<'_> {
+    /// Resolves `cells` (whose points are `sorted`, a window starting at slot `offset`, and
+    /// whose flags are `touched`, a window starting at cell `cells.start`), halving the run of
+    /// boxes between threads down to about [`PARALLEL_CHUNK`] points. Recursion rather than a
+    /// list of chunks, so nothing is allocated.
+    fn resolve(
+        &self,
+        sorted: &mut [Vec3],
+        touched: &mut [bool],
+        cells: std::ops::Range<usize>,
+        offset: usize,
+    ) {
+        let start = self.start;
+        let (lo, hi) = (start[cells.start] as usize, start[cells.end] as usize);
+        if hi - lo <= PARALLEL_CHUNK || cells.len() < 2 {
+            for (c, touched) in cells.clone().zip(touched) {
+                let range = start[c] as usize..start[c + 1] as usize;
+                let window = range.start - offset..range.end - offset;
+                let members = &self.members[range];
+                *touched = resolve_box(
+                    self.repulsion,
+                    self.pinned,
+                    members,
+                    &mut sorted[window],
+                    |_, _| {},
+                );
+            }
+            return;
         }
-        return;
+        // Split at the first box starting in the second half of the points (always inside the
+        // run: the run has two boxes or more).
+        let half = usize::midpoint(lo, hi);
+        let mid = (cells.start + start[cells.clone()].partition_point(|&s| (s as usize) <= half))
+            .clamp(cells.start + 1, cells.end - 1);
+        let split = start[mid] as usize;
+        let (left, right) = sorted.split_at_mut(split - offset);
+        let (touched_left, touched_right) = touched.split_at_mut(mid - cells.start);
+        rayon::join(
+            || self.resolve(left, touched_left, cells.start..mid, offset),
+            || self.resolve(right, touched_right, mid..cells.end, split),
+        );
     }
-    // Split at the first box starting in the second half of the points (always inside the run:
-    // the run has two boxes or more).
-    let half = usize::midpoint(lo, hi);
-    let mid = (cells.start + start[cells.clone()].partition_point(|&s| (s as usize) <= half))
-        .clamp(cells.start + 1, cells.end - 1);
-    let split = start[mid] as usize;
-    let (left, right) = sorted.split_at_mut(split - offset);
-    rayon::join(
-        || {
-            resolve_boxes(
-                repulsion,
-                pinned,
-                start,
-                members,
-                left,
-                cells.start..mid,
-                offset,
-            );
-        },
-        || {
-            resolve_boxes(
-                repulsion,
-                pinned,
-                start,
-                members,
-                right,
-                mid..cells.end,
-                split,
-            );
-        },
-    );
 }
 
 /// The course's repulsion between points of a box.
