@@ -1,5 +1,5 @@
 //! One 30-step frame of the faithful Verlet solver: the five standard scenes, big grids and
-//! threads. Run with `cargo bench -p cloth-solver --bench frame`.
+//! threads; and one self-collision pass at three sizes. Run with `cargo bench -p cloth-solver --bench frame`.
 //!
 //! Each benchmark first simulates one second (90 frames) so the cloth is hanging, stretched and
 //! in self-contact, then times frames continuing from there; throughput is reported in
@@ -10,8 +10,8 @@ use std::time::Duration;
 
 use cloth_mesh::{ClothMesh, ClothState, GridSpec, Orientation, Vec3};
 use cloth_solver::{
-    BenchRun, Collider, ConstraintOrder, Plane, Solver, Sphere, StepParams, Verlet, advance_frame,
-    pinned_grid, time_frames,
+    BenchRun, Collider, ConstraintOrder, Plane, Solver, SpatialHash, Sphere, StepParams, Verlet,
+    advance_frame, pinned_grid, time_frames,
 };
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
@@ -143,6 +143,45 @@ fn grids(c: &mut Criterion) {
     g.finish();
 }
 
+/// One self-collision pass (hash rebuild and resolution) on cloths of 64, 128, 256 and 512 points
+/// per side with the same local geometry: the flat cloth at the standard spacing, each point
+/// jittered by up to half a spacing, so every box holds about nine points and a few pairs in
+/// reach wherever the cloth is (a wrinkled cloth). A linear pass then costs about the same per
+/// point at every size, up to cache effects (criterion reports points per second).
+fn self_collision(c: &mut Criterion) {
+    let mut g = c.benchmark_group("self_collision");
+    g.sample_size(20);
+    g.measurement_time(Duration::from_secs(4));
+    for n in [64, 128, 256, 512] {
+        let mesh = pinned_grid(n).unwrap();
+        let h = 1.0 / 49.0;
+        let mut rng = cloth_mesh::SplitMix64::new(n as u64);
+        let template: Vec<Vec3> = mesh
+            .start_positions()
+            .iter()
+            .map(|p| {
+                Vec3::new(
+                    p.x + rng.uniform(-h, h) / 2.0,
+                    p.y + rng.uniform(-h, h) / 2.0,
+                    p.z + rng.uniform(-h, h) / 2.0,
+                )
+            })
+            .collect();
+        let mut hash = SpatialHash::default();
+        let mut work = template.clone();
+        g.throughput(Throughput::Elements(mesh.len() as u64));
+        g.bench_function(BenchmarkId::new("pass", n), |b| {
+            b.iter(|| {
+                // The copy is linear too; it keeps every pass starting from the same state.
+                work.copy_from_slice(&template);
+                hash.resolve(&mesh, &mut work, 30);
+                black_box(&work);
+            });
+        });
+    }
+    g.finish();
+}
+
 fn threads(c: &mut Criterion) {
     let mut g = c.benchmark_group("threads");
     g.sample_size(10);
@@ -175,5 +214,5 @@ impl BenchMarkName {
     }
 }
 
-criterion_group!(benches, standard, grids, threads);
+criterion_group!(benches, standard, grids, self_collision, threads);
 criterion_main!(benches);
