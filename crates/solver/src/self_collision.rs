@@ -30,38 +30,13 @@ pub struct SpatialHash {
     start: Vec<u32>,
     /// Point indices grouped by cell.
     members: Vec<u32>,
-    /// Box keys to cell numbers.
-    table: CellTable,
-    /// Box key of each cell (the order cells were handed out in).
-    cell_keys: Vec<u64>,
-    /// Per thread: the threaded rebuild's cells of a run of points.
-    chunks: Vec<ChunkCells>,
+    /// The open-addressing table: box key, cell number, and the generation that wrote the slot
+    /// (a slot whose stamp is not the current one is empty).
+    slots: Vec<Slot>,
+    /// The current generation; bumped by every rebuild.
+    stamp: u32,
     /// Per cell: the threaded pass moved one of its points.
     touched: Vec<bool>,
-}
-
-/// An open-addressing table (linear probing) handing out dense cell numbers for box keys.
-/// Slots carry the generation that wrote them, so emptying the table is one increment.
-#[derive(Debug, Default, Clone)]
-struct CellTable {
-    slots: Vec<Slot>,
-    /// The current generation; a slot with another stamp is empty.
-    stamp: u32,
-}
-
-/// The cells of one thread's run of points in the threaded rebuild.
-#[derive(Debug, Default, Clone)]
-struct ChunkCells {
-    table: CellTable,
-    /// Points per local cell.
-    counts: Vec<u32>,
-    /// Box key per local cell.
-    keys: Vec<u64>,
-    /// Global cell of each local cell.
-    global: Vec<u32>,
-    /// Next slot of each local cell in `members` (its run's points follow those of the runs
-    /// before it in the same box, so each box stays in index order).
-    base: Vec<u32>,
 }
 
 #[derive(Debug, Default, Clone, Copy)]
@@ -120,35 +95,21 @@ unsafe fn keys_avx2(keys: &mut [u64], positions: &[Vec3], size: (f64, f64, f64))
     keys_portable(keys, positions, size);
 }
 
-/// The box key of every point into `keys`, on `pool`'s threads when there is one.
-fn compute_keys(
-    keys: &mut [u64],
-    positions: &[Vec3],
-    size: (f64, f64, f64),
-    pool: Option<&rayon::ThreadPool>,
-) {
-    use rayon::prelude::*;
-    const CHUNK: usize = 8192;
-    let run = |keys: &mut [u64], positions: &[Vec3]| {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
-            #[allow(unsafe_code)]
-            unsafe {
-                keys_avx2(keys, positions, size);
-            }
-            return;
+/// The box key of every point into `keys`.
+///
+/// NOTE: on the caller's thread even when the solver has threads: the pass takes about 1.4 ns a
+/// point, and handing it to a pool cost more than it saved on a 256 x 256 cloth.
+fn compute_keys(keys: &mut [u64], positions: &[Vec3], size: (f64, f64, f64)) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        #[allow(unsafe_code)]
+        unsafe {
+            keys_avx2(keys, positions, size);
         }
-        keys_portable(keys, positions, size);
-    };
-    match pool {
-        Some(pool) if keys.len() > CHUNK => pool.install(|| {
-            keys.par_chunks_mut(CHUNK)
-                .zip(positions.par_chunks(CHUNK))
-                .for_each(|(k, p)| run(k, p));
-        }),
-        _ => run(keys, positions),
+        return;
     }
+    keys_portable(keys, positions, size);
 }
 
 impl SpatialHash {
@@ -172,47 +133,33 @@ impl SpatialHash {
     }
 
     /// Rebuilds the hash from `positions`.
+    ///
+    /// NOTE: on one thread whatever the solver's thread count. A threaded version (each thread
+    /// numbering the cells of its run of points, then one merge) was tried: on a 256 x 256
+    /// cloth its merge cost as much as the threads saved, because the merge cannot use the
+    /// neighbour shortcut of `assign_cells` and probes the table for every run's every cell.
     pub fn rebuild(&mut self, mesh: &ClothMesh, positions: &[Vec3]) {
-        self.rebuild_in(mesh, positions, None);
-    }
-
-    /// [`SpatialHash::rebuild`] on `pool`'s threads when there is one (the same hash).
-    fn rebuild_in(
-        &mut self,
-        mesh: &ClothMesh,
-        positions: &[Vec3],
-        pool: Option<&rayon::ThreadPool>,
-    ) {
         let size = Self::box_size(mesh);
         let n = positions.len();
         self.key_of.resize(n, 0);
-        self.cell_of.resize(n, 0);
-        self.members.resize(n, 0);
-        self.sorted.resize(n, Vec3::zeros());
-        compute_keys(&mut self.key_of, positions, size, pool);
-        match pool {
-            Some(pool) if pool.current_num_threads() > 1 && n >= 2 * PARALLEL_CHUNK => {
-                let chunks = pool.current_num_threads().min(n / PARALLEL_CHUNK);
-                self.group_threaded(mesh.nw(), positions, pool, chunks);
-            }
-            _ => self.group(mesh.nw(), positions),
+        compute_keys(&mut self.key_of, positions, size);
+        // NOTE: a load factor of at most 1/2 keeps linear-probing chains short. The table is
+        // sized to the number of boxes in use (about a ninth of the points on a smooth cloth),
+        // not to the points: a big cloth's table then stays in cache. It doubles, and the
+        // assignment restarts, when a rebuild finds more boxes; it halves when far too big.
+        let most = (2 * n).next_power_of_two().max(16);
+        let mut table = self.slots.len().clamp(16, most);
+        while table > 16 && 16 * self.start.len() < table {
+            table /= 2;
         }
-    }
+        loop {
+            self.clear_table(table);
+            if self.assign_cells(mesh.nw()) {
+                break;
+            }
+            table *= 2;
+        }
 
-    /// Groups the points by cell on the caller's thread: cells, counts, a prefix sum, then the
-    /// points laid out cell by cell in index order.
-    fn group(&mut self, nw: usize, positions: &[Vec3]) {
-        let n = positions.len();
-        let cells = self.start.len();
-        assign_grown(
-            &mut self.table,
-            &self.key_of,
-            nw,
-            &mut self.cell_of,
-            &mut self.start,
-            &mut self.cell_keys,
-            cells,
-        );
         // Exclusive prefix sum, then place points in index order; afterwards `start[c]` has
         // advanced to the end of cell c, so shifting by one restores the starts.
         let mut sum = 0;
@@ -222,9 +169,11 @@ impl SpatialHash {
             sum += count;
         }
         self.start.push(sum);
+        self.members.resize(n, 0);
+        self.sorted.resize(n, Vec3::zeros());
         // NOTE: local slices, so the compiler knows the stores into one array do not change the
         // others' pointers; and runs of points in one cell take consecutive slots from a
-        // register rather than from a counter in memory (see `assign`).
+        // register rather than from a counter in memory (see `assign_cells`).
         let (start, members, sorted) = (
             &mut self.start[..],
             &mut self.members[..],
@@ -250,122 +199,64 @@ impl SpatialHash {
         self.start[0] = 0;
     }
 
-    /// [`SpatialHash::group`] on `chunks` threads, with the same result: each thread numbers
-    /// the cells of its run of points with its own table; one thread then merges the runs'
-    /// cells (a ninth as many as points) in run order, which hands out the global numbers in
-    /// order of first appearance, as [`SpatialHash::group`] does, and gives each run its slots
-    /// in each box after those of the runs before it; then every thread places its points.
-    fn group_threaded(
-        &mut self,
-        nw: usize,
-        positions: &[Vec3],
-        pool: &rayon::ThreadPool,
-        chunks: usize,
-    ) {
-        use rayon::prelude::*;
-        let n = positions.len();
-        let per = n.div_ceil(chunks);
-        self.chunks.resize_with(chunks, ChunkCells::default);
-        let (keys, cell_of) = (&self.key_of[..], &mut self.cell_of[..]);
-        let runs = &mut self.chunks[..];
-        pool.install(|| {
-            cell_of
-                .par_chunks_mut(per)
-                .zip(keys.par_chunks(per))
-                .zip(runs.par_iter_mut())
-                .for_each(|((cell_of, keys), run)| {
-                    let cells = run.counts.len();
-                    assign_grown(
-                        &mut run.table,
-                        keys,
-                        nw,
-                        cell_of,
-                        &mut run.counts,
-                        &mut run.keys,
-                        cells,
-                    );
-                });
-        });
-
-        // Merge: global cells, counted into `start`, and each run's offset in each box.
-        let most = (2 * n).next_power_of_two().max(16);
-        let mut table = self.table.size_for(self.start.len(), most);
-        loop {
-            self.table.reset(table);
-            self.start.clear();
-            self.cell_keys.clear();
-            if self.merge_runs() {
-                break;
-            }
-            table *= 2;
+    /// Makes `slots` an empty table of `table` slots (a new generation when the size is kept).
+    fn clear_table(&mut self, table: usize) {
+        if self.slots.len() != table {
+            self.slots.clear();
+            self.slots.resize(table, Slot::default());
+            self.stamp = 0;
         }
-        let mut sum = 0;
-        for s in &mut self.start {
-            let count = *s;
-            *s = sum;
-            sum += count;
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            // NOTE: after 2^32 rebuilds the stamps wrap; clear so no stale slot looks current.
+            self.slots.fill(Slot::default());
+            self.stamp = 1;
         }
-        self.start.push(sum);
-        for run in &mut self.chunks {
-            for (base, &g) in run.base.iter_mut().zip(&run.global) {
-                *base += self.start[g as usize];
-            }
-        }
-
-        // Placement: each run writes its points into its own slots of each box.
-        let out = Slots {
-            members: self.members.as_mut_ptr(),
-            sorted: self.sorted.as_mut_ptr(),
-            len: n,
-        };
-        let (cell_of, runs) = (&mut self.cell_of[..], &mut self.chunks[..]);
-        pool.install(|| {
-            cell_of
-                .par_chunks_mut(per)
-                .zip(runs.par_iter_mut())
-                .enumerate()
-                .for_each(|(k, (cell_of, run))| {
-                    let first = k * per;
-                    let mut j = 0;
-                    while j < cell_of.len() {
-                        let local = cell_of[j] as usize;
-                        let mut s = run.base[local] as usize;
-                        let global = run.global[local];
-                        loop {
-                            out.write(s, (first + j) as u32, positions[first + j]);
-                            cell_of[j] = global;
-                            s += 1;
-                            j += 1;
-                            if j == cell_of.len() || cell_of[j] as usize != local {
-                                break;
-                            }
-                        }
-                        run.base[local] = s as u32;
-                    }
-                });
-        });
     }
 
-    /// Hands out global cells to the runs' cells in run order, counting points into `start`;
-    /// false, with the work abandoned, when the cells fill more than half the table.
-    fn merge_runs(&mut self) -> bool {
-        for run in &mut self.chunks {
-            run.global.clear();
-            run.base.clear();
-            for (&key, &count) in run.keys.iter().zip(&run.counts) {
-                let next = self.start.len() as u32;
-                let g = self.table.probe(key, next);
-                if g == next {
-                    self.start.push(0);
-                    self.cell_keys.push(key);
-                    if 2 * self.start.len() > self.table.slots.len() {
-                        return false;
-                    }
-                }
-                run.global.push(g);
-                run.base.push(self.start[g as usize]);
-                self.start[g as usize] += count;
+    /// Gives every point the cell of its box key (cells numbered in order of first appearance)
+    /// and counts the points per cell into `start`; false, with the work abandoned, when the
+    /// boxes fill more than half the table.
+    fn assign_cells(&mut self, nw: usize) -> bool {
+        let n = self.key_of.len();
+        let table = self.slots.len();
+        let shift = 64 - table.trailing_zeros();
+        let mask = table - 1;
+        self.cell_of.resize(n, 0);
+        self.start.clear();
+        let (keys, cell_of, start) = (&self.key_of[..], &mut self.cell_of[..], &mut self.start);
+        let (slots, stamp) = (&mut self.slots[..], self.stamp);
+        // NOTE: runs of points in one box are counted in a register and added at the run's end:
+        // a memory counter bumped point after point waits for its own previous store.
+        let (mut run_cell, mut run_len) = (0u32, 0u32);
+        for i in 0..n {
+            let key = keys[i];
+            // NOTE: boxes are three spacings wide, so most points share the box of the point
+            // before them or of the one a row up. Taking the cell from them skips the probe
+            // (a cache miss on a big cloth) and hands out the same cell as the table would: a
+            // key seen before is in the table with that cell.
+            if i >= 1 && keys[i - 1] == key {
+                cell_of[i] = run_cell;
+                run_len += 1;
+                continue;
             }
+            let cell = if i >= nw && keys[i - nw] == key {
+                cell_of[i - nw]
+            } else {
+                let cell = probe(slots, stamp, start, key, shift, mask);
+                if 2 * start.len() > table {
+                    return false;
+                }
+                cell
+            };
+            if run_len > 0 {
+                start[run_cell as usize] += run_len;
+            }
+            cell_of[i] = cell;
+            (run_cell, run_len) = (cell, 1);
+        }
+        if run_len > 0 {
+            start[run_cell as usize] += run_len;
         }
         true
     }
@@ -405,7 +296,7 @@ impl SpatialHash {
         steps_per_frame: u32,
         pool: Option<&rayon::ThreadPool>,
     ) {
-        self.rebuild_in(mesh, positions, pool);
+        self.rebuild(mesh, positions);
         let repulsion = Repulsion::new(mesh, steps_per_frame);
         let pinned = mesh.pinned();
         // NOTE: a point's correction reads only the points of its own box, and only the
@@ -459,172 +350,34 @@ impl SpatialHash {
     }
 }
 
-impl CellTable {
-    /// A table size for about `cells` cells (the last rebuild's), at most `most` slots.
-    ///
-    /// NOTE: a load factor of at most 1/2 keeps linear-probing chains short. The table is sized
-    /// to the number of boxes in use (about a ninth of the points on a smooth cloth), not to
-    /// the points: a big cloth's table then stays in cache. It doubles, and the assignment
-    /// restarts, when a rebuild finds more boxes; it halves when far too big.
-    fn size_for(&self, cells: usize, most: usize) -> usize {
-        let mut table = self.slots.len().clamp(16, most.max(16));
-        while table > 16 && 16 * cells < table {
-            table /= 2;
-        }
-        table
-    }
-
-    /// Empties the table, resized to `size` slots (a power of two) when it has another size.
-    fn reset(&mut self, size: usize) {
-        if self.slots.len() != size {
-            self.slots.clear();
-            self.slots.resize(size, Slot::default());
-            self.stamp = 0;
-        }
-        self.stamp = self.stamp.wrapping_add(1);
-        if self.stamp == 0 {
-            // NOTE: after 2^32 rebuilds the stamps wrap; clear so no stale slot looks current.
-            self.slots.fill(Slot::default());
-            self.stamp = 1;
-        }
-    }
-
-    /// The cell of `key`; a new key gets cell `next`.
-    #[inline]
-    fn probe(&mut self, key: u64, next: u32) -> u32 {
-        let mask = self.slots.len() - 1;
-        // Fibonacci hashing: the top bits of key * 2^64/phi spread neighbouring boxes.
-        let shift = 64 - self.slots.len().trailing_zeros();
-        let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
-        loop {
-            let s = &mut self.slots[slot];
-            if s.stamp != self.stamp {
-                *s = Slot {
-                    key,
-                    cell: next,
-                    stamp: self.stamp,
-                };
-                return next;
-            }
-            if s.key == key {
-                return s.cell;
-            }
-            slot = (slot + 1) & mask;
-        }
-    }
-}
-
-/// Numbers the cells of the points with box keys `keys` (rows `nw` wide) in order of first
-/// appearance into `cell_of`, with the points per cell in `counts` and each cell's key in
-/// `cell_keys`; the table is sized from `cells_before` (the last rebuild's count) and grows
-/// until the cells fill at most half of it.
-fn assign_grown(
-    table: &mut CellTable,
-    keys: &[u64],
-    nw: usize,
-    cell_of: &mut [u32],
-    counts: &mut Vec<u32>,
-    cell_keys: &mut Vec<u64>,
-    cells_before: usize,
-) {
-    let most = (2 * keys.len()).next_power_of_two();
-    let mut size = table.size_for(cells_before, most);
+/// The cell of `key`, from the open-addressing table `slots` (a new cell, counted in `start`,
+/// when the key is new).
+#[inline]
+fn probe(
+    slots: &mut [Slot],
+    stamp: u32,
+    start: &mut Vec<u32>,
+    key: u64,
+    shift: u32,
+    mask: usize,
+) -> u32 {
+    // Fibonacci hashing: the top bits of key * 2^64/phi spread neighbouring boxes.
+    let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
     loop {
-        table.reset(size);
-        if assign(table, keys, nw, cell_of, counts, cell_keys) {
-            return;
+        let s = &mut slots[slot];
+        if s.stamp != stamp {
+            *s = Slot {
+                key,
+                cell: start.len() as u32,
+                stamp,
+            };
+            start.push(0);
+            return s.cell;
         }
-        size *= 2;
-    }
-}
-
-/// One try of [`assign_grown`]; false, with the work abandoned, when the cells fill more than
-/// half the table.
-fn assign(
-    table: &mut CellTable,
-    keys: &[u64],
-    nw: usize,
-    cell_of: &mut [u32],
-    counts: &mut Vec<u32>,
-    cell_keys: &mut Vec<u64>,
-) -> bool {
-    counts.clear();
-    cell_keys.clear();
-    let size = table.slots.len();
-    // NOTE: runs of points in one box are counted in a register and added at the run's end: a
-    // memory counter bumped point after point waits for its own previous store.
-    let (mut run_cell, mut run_len) = (0u32, 0u32);
-    for (i, &key) in keys.iter().enumerate() {
-        // NOTE: boxes are three spacings wide, so most points share the box of the point before
-        // them or of the one a row up. Taking the cell from them skips the probe (a cache miss
-        // on a big cloth) and hands out the same cell as the table would: a key seen before is
-        // in the table with that cell.
-        if i >= 1 && keys[i - 1] == key {
-            cell_of[i] = run_cell;
-            run_len += 1;
-            continue;
+        if s.key == key {
+            return s.cell;
         }
-        let cell = if i >= nw && keys[i - nw] == key {
-            cell_of[i - nw]
-        } else {
-            let next = counts.len() as u32;
-            let cell = table.probe(key, next);
-            if cell == next {
-                counts.push(0);
-                cell_keys.push(key);
-                if 2 * counts.len() > size {
-                    return false;
-                }
-            }
-            cell
-        };
-        if run_len > 0 {
-            counts[run_cell as usize] += run_len;
-        }
-        cell_of[i] = cell;
-        (run_cell, run_len) = (cell, 1);
-    }
-    if run_len > 0 {
-        counts[run_cell as usize] += run_len;
-    }
-    true
-}
-
-/// The threaded placement's shared output: `members` and `sorted`, written by several threads
-/// at slots no two of them share.
-#[derive(Clone, Copy)]
-struct Slots {
-    members: *mut u32,
-    sorted: *mut Vec3,
-    len: usize,
-}
-
-// SAFETY: `Slots` is only used by `group_threaded`, whose threads write disjoint slots (each
-// run's slots in each box are its own range, see `merge_runs`) of arrays that outlive the
-// parallel section and are not otherwise accessed during it.
-#[allow(unsafe_code)]
-unsafe impl Send for Slots {}
-#[allow(unsafe_code)]
-unsafe impl Sync for Slots {}
-
-impl Slots {
-    /// Puts point `i` at `position` into slot `s`.
-    #[inline]
-    fn write(self, s: usize, i: u32, position: Vec3) {
-        // NOTE: a real check, not a debug one: it keeps the writes in bounds even if the slot
-        // arithmetic were wrong, at the cost of one compare per point.
-        assert!(
-            s < self.len,
-            "slot {s} outside the hash's {} slots",
-            self.len
-        );
-        // SAFETY: in bounds (checked above); no other thread writes slot `s` (see the Send and
-        // Sync impls), and nothing reads it until the parallel section ends.
-        #[allow(unsafe_code)]
-        unsafe {
-            self.members.add(s).write(i);
-            self.sorted.add(s).write(position);
-        }
+        slot = (slot + 1) & mask;
     }
 }
 
@@ -905,48 +658,6 @@ mod tests {
     }
 
     #[test]
-    fn the_threaded_rebuild_builds_the_same_hash() {
-        // A smooth cloth, a crumpled one and a scattered one (many cells, each table grows).
-        let mesh = ClothMesh::new(&GridSpec {
-            num_width_points: 150,
-            num_height_points: 120,
-            ..GridSpec::default()
-        })
-        .unwrap();
-        let mut rng = cloth_mesh::SplitMix64::new(21);
-        let smooth = mesh.start_positions().to_vec();
-        let mut crumpled = smooth.clone();
-        for p in &mut crumpled {
-            *p = Vec3::new(p.x * 0.2, p.y + rng.uniform(-0.05, 0.05), p.z * 0.3);
-        }
-        let scattered: Vec<Vec3> = (0..mesh.len())
-            .map(|_| {
-                Vec3::new(
-                    rng.uniform(-2.0, 2.0),
-                    rng.uniform(-2.0, 2.0),
-                    rng.uniform(-2.0, 2.0),
-                )
-            })
-            .collect();
-        for threads in [2, 3] {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            let (mut one, mut many) = (SpatialHash::default(), SpatialHash::default());
-            // The same hashes rebuilt several times: tables grow and shrink between states.
-            for positions in [&smooth, &scattered, &crumpled, &smooth] {
-                one.rebuild_in(&mesh, positions, None);
-                many.rebuild_in(&mesh, positions, Some(&pool));
-                assert_eq!(one.start, many.start, "{threads} threads");
-                assert_eq!(one.members, many.members, "{threads} threads");
-                assert_eq!(one.cell_of, many.cell_of, "{threads} threads");
-                assert_eq!(one.sorted, many.sorted, "{threads} threads");
-            }
-        }
-    }
-
-    #[test]
     fn box_bits_are_the_floor_offset_and_wrapped_to_21_bits() {
         let expected = |v: f64| ((v.floor() as i64 + (1 << 20)) as u64) & 0x1F_FFFF;
         for v in [
@@ -996,7 +707,7 @@ mod tests {
         let mut portable = vec![0; positions.len()];
         keys_portable(&mut portable, &positions, size);
         let mut dispatched = vec![1; positions.len()];
-        compute_keys(&mut dispatched, &positions, size, None);
+        compute_keys(&mut dispatched, &positions, size);
         assert_eq!(portable, dispatched);
     }
 }
