@@ -36,8 +36,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
     )?;
     println!(
-        "{n}x{n} self-collision {self_collision} threads {threads} {order:?}: {:.3} ms/frame, {:.1} M particle-steps/s, real-time x{:.1}",
-        r.ms_per_frame(),
+        "{n}x{n} self-collision {self_collision} threads {threads} {order:?}: {:.3} ms/frame (median), {:.1} M particle-steps/s, real-time x{:.1}",
+        r.median_ms_per_frame(),
         r.particle_steps_per_sec() / 1e6,
         r.realtime_factor()
     );

@@ -263,3 +263,42 @@ fn render_rejects_bad_sizes_and_views_with_clear_messages() {
         assert!(stderr(&o).contains(message), "{args:?}: {}", stderr(&o));
     }
 }
+
+#[test]
+fn bench_reports_each_configuration_with_consistent_figures() {
+    let o = clothsim(&[
+        "bench", "--grid", "8", "--grid", "12", "--frames", "5", "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rows = v.as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for (row, n) in rows.iter().zip([8u64, 12]) {
+        assert_eq!(row["grid"], n);
+        assert_eq!(row["points"], n * n);
+        assert_eq!(row["frames"], 5);
+        let median = row["ms_per_frame_median"].as_f64().unwrap();
+        let mean = row["ms_per_frame_mean"].as_f64().unwrap();
+        assert!(median > 0.0 && mean > 0.0);
+        // Throughput and real-time factor follow from the median frame: points x 30 steps per
+        // frame, and 1/90 s simulated per frame.
+        let rate = row["particle_steps_per_sec"].as_f64().unwrap();
+        let expected = (n * n) as f64 * 30.0 / (median / 1e3);
+        assert!((rate / expected - 1.0).abs() < 1e-9, "{rate} vs {expected}");
+        let realtime = row["realtime_factor"].as_f64().unwrap();
+        assert!((realtime / (1.0 / 90.0 / (median / 1e3)) - 1.0).abs() < 1e-9);
+    }
+    let table = clothsim(&["bench", "--grid", "8", "--frames", "2"]);
+    assert!(table.status.success(), "{}", stderr(&table));
+    let text = String::from_utf8(table.stdout).unwrap();
+    assert!(text.lines().next().unwrap().contains("median ms"));
+    assert!(text.lines().nth(1).unwrap().trim_start().starts_with("8x8"));
+}
+
+#[test]
+fn bench_rejects_a_bad_grid_with_a_clear_message() {
+    let o = clothsim(&["bench", "--grid", "1", "--frames", "1"]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("--grid 1"), "{err}");
+}
