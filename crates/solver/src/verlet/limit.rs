@@ -63,6 +63,8 @@ struct BandScratch {
     /// Per emitting point: bit `t` set when its direction-`t` spring exists and is not proven
     /// inside.
     check: Vec<u8>,
+    /// The pre-pass's marks of one row, a word per point (see `prepass_portable`).
+    row_marks: Vec<u64>,
     /// `moved[margin + i]`: point `i` of the band's window moved during this sweep. The margin
     /// lets the sweep read the flags of partners in the first two rows without bounds tests.
     moved: Vec<bool>,
@@ -240,8 +242,12 @@ impl BandScratch {
             soa.extend(positions.iter().map(|p| p[c]));
         }
         let [px, py, pz] = &self.soa;
+        // NOTE: the marks of a row are gathered in 64-bit words, one per point, the width of a
+        // compare's result, and narrowed to bytes once per row: or-ing each direction's compare
+        // straight into bytes narrowed the four lanes six times a point.
+        self.row_marks.resize(nw, 0);
         for (k, y) in rows.enumerate() {
-            let row = &mut self.check[k * nw..(k + 1) * nw];
+            let row = &mut self.row_marks[..];
             row.fill(0);
             for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
                 let cols = valid_columns(nw, dx);
@@ -261,8 +267,12 @@ impl BandScratch {
                     let (ddx, ddy, ddz) = (bx[i] - ax[i], by[i] - ay[i], bz[i] - az[i]);
                     let len2 = ddx * ddx + ddy * ddy + ddz * ddz;
                     let inside = len2 <= floor;
-                    out[i] |= u8::from(!inside) << t;
+                    out[i] |= u64::from(!inside) << t;
                 }
+            }
+            for (check, &marks) in self.check[k * nw..(k + 1) * nw].iter_mut().zip(&*row) {
+                // Six direction bits: the narrowing keeps them all.
+                *check = marks as u8;
             }
         }
     }
