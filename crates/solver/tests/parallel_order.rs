@@ -1,7 +1,7 @@
 //! The parallel constraint order (`ConstraintOrder::Parallel`) and threads.
 //!
-//! The parallel order changes only the order of the self-collision and stretch-limit
-//! corrections; these tests show it keeps the model's constraint and settles where the course's
+//! The parallel order changes only the order of the stretch-limit corrections (self-collision
+//! is the faithful pass in both orders); these tests show it keeps the model's constraint and settles where the course's
 //! order settles, and that thread counts never change results.
 
 use cloth_mesh::{ClothMesh, ClothState};
@@ -43,9 +43,9 @@ fn parallel() -> Verlet {
 
 #[test]
 fn thread_count_never_changes_results() {
-    // The force sweep splits rows between threads without changing any sum, and the parallel
-    // order's bands and snapshot do not depend on the thread count, and self-collision's boxes
-    // are independent: the bits must match. 96 x 96 points, so the threaded passes really
+    // The force sweep splits rows between threads without changing any sum, the parallel
+    // order's bands do not depend on the thread count, and self-collision's boxes are
+    // independent: the bits must match. 96 x 96 points, so the threaded passes really
     // split the cloth (they take about 4,096 points a task).
     let mesh = pinned_grid(96).unwrap();
     let frames = 20;
