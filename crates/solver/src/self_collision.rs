@@ -134,10 +134,11 @@ impl SpatialHash {
 
     /// Rebuilds the hash from `positions`.
     ///
-    /// NOTE: on one thread whatever the solver's thread count. A threaded version (each thread
-    /// numbering the cells of its run of points, then one merge) was tried: on a 256 x 256
-    /// cloth its merge cost as much as the threads saved, because the merge cannot use the
-    /// neighbour shortcut of `assign_cells` and probes the table for every run's every cell.
+    /// NOTE: on one thread whatever the solver's thread count. Two threaded versions were
+    /// measured on a 256 x 256 cloth and dropped: threads numbering the cells of their runs of
+    /// points needed a merge that cannot use the neighbour shortcut of `assign_cells` and cost
+    /// what the threads saved; threads owning boxes by key each scanned every key, branching on
+    /// an owner that changes at random from box to box, and two were slower than one.
     pub fn rebuild(&mut self, mesh: &ClothMesh, positions: &[Vec3]) {
         let size = Self::box_size(mesh);
         let n = positions.len();
