@@ -19,6 +19,9 @@ mod self_collision;
 mod stretch;
 mod verlet;
 
+#[cfg(test)]
+mod testing;
+
 pub use bench::{BenchResult, BenchRun, pinned_grid, time_frames};
 pub use cloth_mesh::{ClothMesh, ClothState, Vec3};
 pub use collider::{Collider, Plane, Sphere, apply_colliders};

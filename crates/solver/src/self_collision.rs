@@ -538,22 +538,28 @@ impl Repulsion {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::assert_same_bits;
     use cloth_mesh::GridSpec;
+
+    /// `n` points scattered uniformly in the cube `[lo, hi)^3` (deterministic for a seed).
+    fn scattered(n: usize, seed: u64, lo: f64, hi: f64) -> Vec<Vec3> {
+        let mut rng = cloth_mesh::SplitMix64::new(seed);
+        (0..n)
+            .map(|_| {
+                Vec3::new(
+                    rng.uniform(lo, hi),
+                    rng.uniform(lo, hi),
+                    rng.uniform(lo, hi),
+                )
+            })
+            .collect()
+    }
 
     #[test]
     fn each_box_lists_exactly_the_points_with_its_integer_box_in_index_order() {
         // A crumpled cloth: points scattered over several boxes (deterministic pseudo-random).
         let mesh = ClothMesh::new(&GridSpec::default()).unwrap();
-        let mut rng = cloth_mesh::SplitMix64::new(7);
-        let positions: Vec<Vec3> = (0..mesh.len())
-            .map(|_| {
-                Vec3::new(
-                    rng.uniform(-0.2, 0.2),
-                    rng.uniform(-0.2, 0.2),
-                    rng.uniform(-0.2, 0.2),
-                )
-            })
-            .collect();
+        let positions = scattered(mesh.len(), 7, -0.2, 0.2);
         let mut hash = SpatialHash::default();
         hash.rebuild(&mesh, &positions);
         let size = SpatialHash::box_size(&mesh);
@@ -577,16 +583,7 @@ mod tests {
         // A cloth crumpled into a 6 cm cube: many boxes with several pairs within reach, so
         // corrections chain through points corrected earlier in the same box.
         let mesh = ClothMesh::new(&GridSpec::default()).unwrap();
-        let mut rng = cloth_mesh::SplitMix64::new(5);
-        let start: Vec<Vec3> = (0..mesh.len())
-            .map(|_| {
-                Vec3::new(
-                    rng.uniform(0.0, 0.06),
-                    rng.uniform(0.0, 0.06),
-                    rng.uniform(0.0, 0.06),
-                )
-            })
-            .collect();
+        let start = scattered(mesh.len(), 5, 0.0, 0.06);
         // The course's sweep, written out: points in index order, boxes from the start.
         let mut hash = SpatialHash::default();
         hash.rebuild(&mesh, &start);
@@ -614,11 +611,7 @@ mod tests {
         hash.resolve(&mesh, &mut fast, 30);
         let moved = course.iter().zip(&start).filter(|(a, b)| a != b).count();
         assert!(moved > mesh.len() / 2, "the test must exercise corrections");
-        for (i, (a, b)) in fast.iter().zip(&course).enumerate() {
-            for c in 0..3 {
-                assert_eq!(a[c].to_bits(), b[c].to_bits(), "point {i} axis {c}");
-            }
-        }
+        assert_same_bits(&fast, &course);
     }
 
     #[test]
@@ -631,16 +624,7 @@ mod tests {
             ..GridSpec::default()
         })
         .unwrap();
-        let mut rng = cloth_mesh::SplitMix64::new(13);
-        let start: Vec<Vec3> = (0..mesh.len())
-            .map(|_| {
-                Vec3::new(
-                    rng.uniform(0.0, 0.12),
-                    rng.uniform(0.0, 0.12),
-                    rng.uniform(0.0, 0.12),
-                )
-            })
-            .collect();
+        let start = scattered(mesh.len(), 13, 0.0, 0.12);
         let mut one = start.clone();
         SpatialHash::default().resolve(&mesh, &mut one, 30);
         let pool = rayon::ThreadPoolBuilder::new()
@@ -651,11 +635,7 @@ mod tests {
         SpatialHash::default().resolve_in(&mesh, &mut three, 30, Some(&pool));
         let moved = one.iter().zip(&start).filter(|(a, b)| a != b).count();
         assert!(moved > mesh.len() / 4, "the test must exercise corrections");
-        for (i, (a, b)) in one.iter().zip(&three).enumerate() {
-            for c in 0..3 {
-                assert_eq!(a[c].to_bits(), b[c].to_bits(), "point {i} axis {c}");
-            }
-        }
+        assert_same_bits(&one, &three);
     }
 
     #[test]
@@ -694,16 +674,7 @@ mod tests {
 
     #[test]
     fn the_avx2_key_pass_gives_the_portable_keys() {
-        let mut rng = cloth_mesh::SplitMix64::new(9);
-        let positions: Vec<Vec3> = (0..1001)
-            .map(|_| {
-                Vec3::new(
-                    rng.uniform(-3.0, 3.0),
-                    rng.uniform(-3.0, 3.0),
-                    rng.uniform(-3.0, 3.0),
-                )
-            })
-            .collect();
+        let positions = scattered(1001, 9, -3.0, 3.0);
         let size = (0.06, 0.05, 0.06);
         let mut portable = vec![0; positions.len()];
         keys_portable(&mut portable, &positions, size);
