@@ -306,46 +306,28 @@ impl SpatialHash {
         // all points in index order. That lets a box with no pair within reach at the start of
         // the pass (most of them) be skipped after one look at each pair, half the work of
         // asking every point about every other; and it lets threads take whole boxes.
+        // The boxes correct `sorted` (their own contiguous runs), on the pool's threads when
+        // there is one, and mark themselves when they moved a point; then the points of the
+        // marked boxes (few) take their positions back from their slots.
         let cells = self.start.len() - 1;
+        self.touched.clear();
+        self.touched.resize(cells, false);
+        let boxes = Boxes {
+            repulsion: &repulsion,
+            pinned,
+            start: &self.start,
+            members: &self.members,
+            threaded: pool.is_some(),
+        };
+        let (sorted, touched) = (&mut self.sorted[..], &mut self.touched[..]);
         match pool {
-            None => {
-                for c in 0..cells {
-                    let range = self.start[c] as usize..self.start[c + 1] as usize;
-                    let members = &self.members[range.clone()];
-                    resolve_box(
-                        &repulsion,
-                        pinned,
-                        members,
-                        &mut self.sorted[range],
-                        |i, p| {
-                            positions[i] = p;
-                        },
-                    );
-                }
-            }
-            Some(pool) => {
-                // The boxes correct `sorted` (their own contiguous runs) in parallel and mark
-                // themselves when they moved a point; then the points of the marked boxes (few)
-                // take their positions back from their slots.
-                self.touched.clear();
-                self.touched.resize(cells, false);
-                let (start, members) = (&self.start[..], &self.members[..]);
-                let (sorted, touched) = (&mut self.sorted[..], &mut self.touched[..]);
-                pool.install(|| {
-                    let boxes = Boxes {
-                        repulsion: &repulsion,
-                        pinned,
-                        start,
-                        members,
-                    };
-                    boxes.resolve(sorted, touched, 0..cells, 0);
-                });
-                for (c, _) in self.touched.iter().enumerate().filter(|(_, t)| **t) {
-                    let range = self.start[c] as usize..self.start[c + 1] as usize;
-                    for (&i, p) in self.members[range.clone()].iter().zip(&self.sorted[range]) {
-                        positions[i as usize] = *p;
-                    }
-                }
+            Some(pool) => pool.install(|| boxes.resolve(sorted, touched, 0..cells, 0)),
+            None => boxes.resolve(sorted, touched, 0..cells, 0),
+        }
+        for (c, _) in self.touched.iter().enumerate().filter(|(_, t)| **t) {
+            let range = self.start[c] as usize..self.start[c + 1] as usize;
+            for (&i, p) in self.members[range.clone()].iter().zip(&self.sorted[range]) {
+                positions[i as usize] = *p;
             }
         }
     }
@@ -386,15 +368,13 @@ fn probe(
 const PARALLEL_CHUNK: usize = 4096;
 
 /// Resolves one box in place: `box_points` are its points' positions in index order (a run of
-/// `sorted`) and `members` their indices; `moved(i, p)` hears of each corrected point. True
-/// when some point moved.
+/// `sorted`) and `members` their indices. True when some point moved.
 #[inline]
 fn resolve_box(
     repulsion: &Repulsion,
     pinned: &[bool],
     members: &[u32],
     box_points: &mut [Vec3],
-    mut moved: impl FnMut(usize, Vec3),
 ) -> bool {
     if !repulsion.any_pair_within_reach(box_points) {
         return false;
@@ -408,26 +388,27 @@ fn resolve_box(
         if let Some(p) = repulsion.corrected(box_points, k) {
             // NOTE: later points of the box see this correction, as in the course.
             box_points[k] = p;
-            moved(i, p);
             any = true;
         }
     }
     any
 }
 
-/// What the threaded self-collision pass shares between its tasks.
+/// What the self-collision pass shares between its tasks.
 struct Boxes<'a> {
     repulsion: &'a Repulsion,
     pinned: &'a [bool],
     start: &'a [u32],
     members: &'a [u32],
+    /// Whether to split the boxes between the current pool's threads.
+    threaded: bool,
 }
 
 impl Boxes<'_> {
     /// Resolves `cells` (whose points are `sorted`, a window starting at slot `offset`, and
-    /// whose flags are `touched`, a window starting at cell `cells.start`), halving the run of
-    /// boxes between threads down to about [`PARALLEL_CHUNK`] points. Recursion rather than a
-    /// list of chunks, so nothing is allocated.
+    /// whose flags are `touched`, a window starting at cell `cells.start`); when threaded,
+    /// halving the run of boxes between threads down to about [`PARALLEL_CHUNK`] points.
+    /// Recursion rather than a list of chunks, so nothing is allocated.
     fn resolve(
         &self,
         sorted: &mut [Vec3],
@@ -437,18 +418,12 @@ impl Boxes<'_> {
     ) {
         let start = self.start;
         let (lo, hi) = (start[cells.start] as usize, start[cells.end] as usize);
-        if hi - lo <= PARALLEL_CHUNK || cells.len() < 2 {
+        if !self.threaded || hi - lo <= PARALLEL_CHUNK || cells.len() < 2 {
             for (c, touched) in cells.clone().zip(touched) {
                 let range = start[c] as usize..start[c + 1] as usize;
                 let window = range.start - offset..range.end - offset;
                 let members = &self.members[range];
-                *touched = resolve_box(
-                    self.repulsion,
-                    self.pinned,
-                    members,
-                    &mut sorted[window],
-                    |_, _| {},
-                );
+                *touched = resolve_box(self.repulsion, self.pinned, members, &mut sorted[window]);
             }
             return;
         }
