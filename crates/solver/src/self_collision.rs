@@ -1,6 +1,7 @@
 //! Self-collision through a spatial hash (step 3 of the course's step).
 
 use cloth_mesh::{ClothMesh, Vec3};
+use rayon::prelude::*;
 
 /// A spatial hash of the cloth's points in boxes of `3 * width / nw` by `3 * height / nh` by the
 /// larger of the two, exactly the course's boxes, so the same pairs of points interact.
@@ -8,42 +9,275 @@ use cloth_mesh::{ClothMesh, Vec3};
 /// The course keys a `std::unordered_map` by a float hash of the box. We key by the box's integer
 /// coordinates and group points with a counting sort:
 ///
-/// 1. each point's box key goes through an open-addressing table (linear probing, at least
-///    twice as many slots as boxes in use) that hands out dense cell numbers, unless the point
-///    before it or the one a row up has the same key; slots are marked with a generation stamp,
-///    so the table is never cleared between steps;
-/// 2. a count per cell, a prefix sum and one placement pass lay the points out cell by cell.
+/// 1. each box gets a cell number, in order of first appearance, from an open-addressing table
+///    (linear probing, at most half full). Cells are kept from one rebuild to the next, so a
+///    point whose key has not changed (nearly every point: a step moves a point a small fraction
+///    of a box) keeps its cell without a lookup, as does a point whose key is that of the point
+///    before it or of the one a row up;
+/// 2. a count per cell, a prefix sum and one placement pass lay the points out box by box.
 ///
-/// Every pass is linear in the number of points and, once the arrays have grown, nothing is
-/// allocated. The placement visits points in index order, so each box lists its points in index
-/// order, the order in which the correction sums are taken (part of the faithful result).
+/// With threads, the points are cut into one contiguous run per thread. Each run computes its
+/// keys, finds their cells (the table is only read) and counts into its own counters; the few
+/// points whose box has no cell yet get one afterwards, in index order, on one thread. The
+/// prefix sum gives each run its own places in each box, after those of the runs before it, so
+/// each box lists its points in index order whatever the thread count: the order in which the
+/// correction sums are taken, part of the faithful result.
+///
+/// Every pass is linear in the number of points or cells (at most about twice the boxes in use:
+/// the table is cleared when the cloth has left more boxes behind) and, once the arrays have
+/// grown, nothing is allocated.
 #[derive(Debug, Default, Clone)]
 pub struct SpatialHash {
-    /// Cell number of each point.
-    cell_of: Vec<u32>,
-    /// Box key of each point (lets a point reuse the cell of a neighbour in the same box).
+    /// Box key of each point, this rebuild's.
     key_of: Vec<u64>,
-    /// The points' positions in `members` order: a box's points are contiguous, so the pair
-    /// loop reads consecutive memory instead of gathering from the whole cloth.
-    sorted: Vec<Vec3>,
+    /// Box key of each point at the last rebuild.
+    last_key_of: Vec<u64>,
+    /// Cell of each point.
+    cell_of: Vec<u32>,
+    /// Whether `last_key_of` and `cell_of` hold the last rebuild's keys and cells (false at
+    /// first, after the table was cleared, and when the cloth changed size).
+    coherent: bool,
+    /// Box keys and their cells.
+    table: Table,
+    /// Cells with points at the last rebuild.
+    live: usize,
+    /// Per run of points: its count per cell, which the prefix sum turns into its next place in
+    /// each cell; and its points whose cell was not found.
+    runs: Vec<Run>,
     /// `start[c]..start[c + 1]` is cell `c`'s range in `members` (length cells + 1).
     start: Vec<u32>,
     /// Point indices grouped by cell.
     members: Vec<u32>,
-    /// The open-addressing table: box key, cell number, and the generation that wrote the slot
-    /// (a slot whose stamp is not the current one is empty).
-    slots: Vec<Slot>,
-    /// The current generation; bumped by every rebuild.
-    stamp: u32,
-    /// Per cell: the threaded pass moved one of its points.
+    /// The points' positions in `members` order: a box's points are contiguous, so the pair
+    /// loop reads consecutive memory instead of gathering from the whole cloth.
+    sorted: Vec<Vec3>,
+    /// Per cell: the resolution moved one of its points.
     touched: Vec<bool>,
 }
 
-#[derive(Debug, Default, Clone, Copy)]
+/// What a run of points keeps between the passes of a rebuild.
+#[derive(Debug, Default, Clone)]
+struct Run {
+    counts: Vec<u32>,
+    /// Points (from the run's first) whose cell is still to be found.
+    misses: Vec<u32>,
+}
+
+/// A run's windows of `key_of`, `last_key_of` and `cell_of`, and its [`Run`].
+type RunWindows<'a> = (((&'a mut [u64], &'a [u64]), &'a mut [u32]), &'a mut Run);
+
+/// The cell of a point whose cell is still to be found.
+const PENDING: u32 = u32::MAX;
+
+/// A key no box has: box keys use the low 63 bits.
+const EMPTY: u64 = u64::MAX;
+
+/// An open-addressing table from box keys to cells (linear probing, at most half full).
+#[derive(Debug, Default, Clone)]
+struct Table {
+    slots: Vec<Slot>,
+    /// Cells handed out, which is the number of keys in the table.
+    cells: usize,
+}
+
+#[derive(Debug, Clone, Copy)]
 struct Slot {
     key: u64,
     cell: u32,
-    stamp: u32,
+}
+
+impl Table {
+    /// Empties the table and gives it `size` slots (a power of two).
+    fn clear(&mut self, size: usize) {
+        self.slots.clear();
+        self.slots.resize(
+            size,
+            Slot {
+                key: EMPTY,
+                cell: 0,
+            },
+        );
+        self.cells = 0;
+    }
+
+    /// Where `key` is, or the empty slot where it would go.
+    #[inline]
+    fn home(&self, key: u64) -> usize {
+        let size = self.slots.len();
+        // Fibonacci hashing: the top bits of key * 2^64/phi spread neighbouring boxes.
+        let mut slot =
+            (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> (64 - size.trailing_zeros())) as usize;
+        loop {
+            let seen = self.slots[slot].key;
+            if seen == key || seen == EMPTY {
+                return slot;
+            }
+            slot = (slot + 1) & (size - 1);
+        }
+    }
+
+    /// The cell of `key`, if it has one.
+    #[inline]
+    fn find(&self, key: u64) -> Option<u32> {
+        let slot = self.slots[self.home(key)];
+        (slot.key == key).then_some(slot.cell)
+    }
+
+    /// The cell of `key`, a new one (the next number) when the key is new.
+    fn cell(&mut self, key: u64) -> u32 {
+        let slot = self.home(key);
+        if self.slots[slot].key == key {
+            return self.slots[slot].cell;
+        }
+        if 2 * (self.cells + 1) > self.slots.len() {
+            // NOTE: cells keep their numbers, so the points' cells stay valid.
+            let old = std::mem::take(&mut self.slots);
+            self.slots = vec![
+                Slot {
+                    key: EMPTY,
+                    cell: 0
+                };
+                2 * old.len()
+            ];
+            for s in old.iter().filter(|s| s.key != EMPTY) {
+                let home = self.home(s.key);
+                self.slots[home] = *s;
+            }
+            return self.cell(key);
+        }
+        let cell = self.cells as u32;
+        self.slots[slot] = Slot { key, cell };
+        self.cells += 1;
+        cell
+    }
+}
+
+/// A table for `boxes` boxes in use: a quarter full, so the cloth can enter as many boxes again
+/// before it grows.
+fn table_size(boxes: usize) -> usize {
+    (4 * boxes).max(64).next_power_of_two()
+}
+
+/// What the runs of a rebuild's cell pass share.
+struct CellPass<'a> {
+    table: &'a Table,
+    positions: &'a [Vec3],
+    size: (f64, f64, f64),
+    nw: usize,
+    /// Whether the points' cells from the last rebuild are valid.
+    coherent: bool,
+}
+
+impl CellPass<'_> {
+    /// Keys, cells and per-cell counts of the run of points starting at point `first` (`keys`,
+    /// `last_keys` and `cell_of` are its windows). Points whose box has no cell yet are
+    /// [`PENDING`], listed in `run.misses` and not counted.
+    fn run(
+        &self,
+        first: usize,
+        keys: &mut [u64],
+        last_keys: &[u64],
+        cell_of: &mut [u32],
+        run: &mut Run,
+    ) {
+        compute_keys(keys, &self.positions[first..first + keys.len()], self.size);
+        run.counts.clear();
+        run.counts.resize(self.table.cells, 0);
+        run.misses.clear();
+        let (counts, nw) = (&mut run.counts[..], self.nw);
+        // NOTE: runs of points in one cell are counted in a register and added at the run's
+        // end: a memory counter bumped point after point waits for its own previous store.
+        let (mut run_cell, mut run_len) = (PENDING, 0u32);
+        for k in 0..keys.len() {
+            let key = keys[k];
+            // NOTE: cheapest first. A point that stayed in its box keeps its cell; boxes are
+            // three spacings wide, so most other points share the box of the point before them
+            // or of the one a row up. Either way the lookup (a cache miss on a big cloth) is
+            // skipped and the cell is the one the table would give.
+            let cell = if self.coherent && last_keys[k] == key {
+                cell_of[k]
+            } else if k >= 1 && keys[k - 1] == key && cell_of[k - 1] != PENDING {
+                cell_of[k - 1]
+            } else if k >= nw && keys[k - nw] == key && cell_of[k - nw] != PENDING {
+                cell_of[k - nw]
+            } else if let Some(cell) = self.table.find(key) {
+                cell
+            } else {
+                run.misses.push(k as u32);
+                PENDING
+            };
+            cell_of[k] = cell;
+            if cell != run_cell {
+                if run_cell != PENDING {
+                    counts[run_cell as usize] += run_len;
+                }
+                (run_cell, run_len) = (cell, 0);
+            }
+            run_len += 1;
+        }
+        if run_cell != PENDING {
+            counts[run_cell as usize] += run_len;
+        }
+    }
+}
+
+/// `members` and `sorted` as the placement's runs share them.
+///
+/// NOTE: raw pointers because the runs write interleaved, disjoint places of the same arrays
+/// (each run has its own places in every box), which no safe split of a slice can express.
+struct Places {
+    members: *mut u32,
+    sorted: *mut Vec3,
+    len: usize,
+}
+
+// SAFETY: `Places` is only used by `place_run`, whose runs write disjoint places.
+#[allow(unsafe_code)]
+unsafe impl Sync for Places {}
+
+impl Places {
+    /// Writes point `i` at `place`.
+    ///
+    /// # Safety
+    /// No other thread may write `place` at the same time.
+    #[allow(unsafe_code)]
+    #[inline]
+    unsafe fn put(&self, place: u32, i: usize, p: Vec3) {
+        let place = place as usize;
+        assert!(place < self.len, "a place past the end of the layout");
+        // SAFETY: in bounds (just checked); the caller guarantees no concurrent write.
+        unsafe {
+            *self.members.add(place) = i as u32;
+            *self.sorted.add(place) = p;
+        }
+    }
+}
+
+/// Places the run of points starting at `first` (whose cells are `cell_of`) at their places,
+/// `next[c]` being the run's next place in cell `c`.
+fn place_run(places: &Places, positions: &[Vec3], first: usize, cell_of: &[u32], next: &mut [u32]) {
+    let n = cell_of.len();
+    let mut k = 0;
+    while k < n {
+        let c = cell_of[k] as usize;
+        let mut place = next[c];
+        // NOTE: a run of points in one cell takes consecutive places from a register.
+        loop {
+            // SAFETY: the prefix sum gave this run of points places `next[c]..` in cell `c`,
+            // exactly as many as it counted there and disjoint from every other run's and
+            // cell's; only this run writes them, each once.
+            #[allow(unsafe_code)]
+            unsafe {
+                places.put(place, first + k, positions[first + k]);
+            }
+            place += 1;
+            k += 1;
+            if k == n || cell_of[k] as usize != c {
+                break;
+            }
+        }
+        next[c] = place;
+    }
 }
 
 /// Squared distance of two points, summed as `(x^2 + y^2) + z^2` like nalgebra's `norm`.
@@ -133,143 +367,145 @@ impl SpatialHash {
     }
 
     /// Rebuilds the hash from `positions`.
-    ///
-    /// NOTE: on one thread whatever the solver's thread count. Two threaded versions were
-    /// measured on a 256 x 256 cloth and dropped: threads numbering the cells of their runs of
-    /// points needed a merge that cannot use the neighbour shortcut of `assign_cells` and cost
-    /// what the threads saved; threads owning boxes by key each scanned every key, branching on
-    /// an owner that changes at random from box to box, and two were slower than one.
     pub fn rebuild(&mut self, mesh: &ClothMesh, positions: &[Vec3]) {
-        let size = Self::box_size(mesh);
+        self.rebuild_in(mesh, positions, None);
+    }
+
+    /// [`SpatialHash::rebuild`], on `pool`'s threads when there is one and the cloth is big
+    /// enough to share: the same boxes, each listing its points in index order.
+    pub(crate) fn rebuild_in(
+        &mut self,
+        mesh: &ClothMesh,
+        positions: &[Vec3],
+        pool: Option<&rayon::ThreadPool>,
+    ) {
         let n = positions.len();
-        self.key_of.resize(n, 0);
-        compute_keys(&mut self.key_of, positions, size);
-        // NOTE: a load factor of at most 1/2 keeps linear-probing chains short. The table is
-        // sized to the number of boxes in use (about a ninth of the points on a smooth cloth),
-        // not to the points: a big cloth's table then stays in cache. It doubles, and the
-        // assignment restarts, when a rebuild finds more boxes; it halves when far too big.
-        let most = (2 * n).next_power_of_two().max(16);
-        let mut table = self.slots.len().clamp(16, most);
-        while table > 16 && 16 * self.start.len() < table {
-            table /= 2;
+        let threads = pool.map_or(1, rayon::ThreadPool::current_num_threads);
+        // Runs of at least `PARALLEL_CHUNK` points: fewer points are not worth a thread.
+        let chunk = n.div_ceil(threads.min(n / PARALLEL_CHUNK).max(1)).max(1);
+        let runs = n.div_ceil(chunk);
+        if self.key_of.len() != n {
+            self.key_of.resize(n, 0);
+            self.cell_of.resize(n, 0);
+            self.coherent = false;
         }
-        loop {
-            self.clear_table(table);
-            if self.assign_cells(mesh.nw()) {
-                break;
-            }
-            table *= 2;
+        std::mem::swap(&mut self.key_of, &mut self.last_key_of);
+        self.key_of.resize(n, 0);
+        self.runs.resize_with(runs, Run::default);
+        // NOTE: cells of boxes the cloth has left stay numbered (and are empty) until the
+        // table is cleared: once they outnumber the boxes in use. The table is sized to the
+        // boxes in use (about a ninth of the points on a smooth cloth), not to the points, so a
+        // big cloth's table stays in cache.
+        let live = if self.start.len() > 1 {
+            self.live
+        } else {
+            n / 8
+        };
+        if !self.coherent || self.table.cells > 2 * live + 64 {
+            self.table.clear(table_size(live));
+            self.coherent = false;
         }
 
-        // Exclusive prefix sum, then place points in index order; afterwards `start[c]` has
-        // advanced to the end of cell c, so shifting by one restores the starts.
-        let mut sum = 0;
-        for s in &mut self.start {
-            let count = *s;
-            *s = sum;
-            sum += count;
+        // 1. Keys, and cells where the table has them, run by run.
+        let pass = CellPass {
+            table: &self.table,
+            positions,
+            size: Self::box_size(mesh),
+            nw: mesh.nw(),
+            coherent: self.coherent,
+        };
+        let each = |(r, (((keys, last), cells), run)): (usize, RunWindows<'_>)| {
+            pass.run(r * chunk, keys, last, cells, run);
+        };
+        let (keys, last, cells) = (&mut self.key_of, &self.last_key_of, &mut self.cell_of);
+        match pool {
+            Some(pool) if runs > 1 => pool.install(|| {
+                keys.par_chunks_mut(chunk)
+                    .zip(last.par_chunks(chunk))
+                    .zip(cells.par_chunks_mut(chunk))
+                    .zip(self.runs.par_iter_mut())
+                    .enumerate()
+                    .for_each(each);
+            }),
+            _ => keys
+                .chunks_mut(chunk)
+                .zip(last.chunks(chunk))
+                .zip(cells.chunks_mut(chunk))
+                .zip(self.runs.iter_mut())
+                .enumerate()
+                .for_each(each),
         }
-        self.start.push(sum);
+
+        // 2. The points the table did not know, in index order, so new boxes are numbered in
+        //    order of first appearance whatever the thread count.
+        for (r, run) in self.runs.iter().enumerate() {
+            for &k in &run.misses {
+                let i = r * chunk + k as usize;
+                self.cell_of[i] = self.table.cell(self.key_of[i]);
+            }
+        }
+        let cells = self.table.cells;
+        for (r, run) in self.runs.iter_mut().enumerate() {
+            run.counts.resize(cells, 0);
+            for &k in &run.misses {
+                run.counts[self.cell_of[r * chunk + k as usize] as usize] += 1;
+            }
+        }
+        self.coherent = true;
+
+        // 3. Exclusive prefix sum over the cells, run within cell: each run's count per cell
+        //    becomes its first place there.
+        self.start.resize(cells + 1, 0);
+        let (mut sum, mut live) = (0u32, 0usize);
+        for (c, start) in self.start[..cells].iter_mut().enumerate() {
+            *start = sum;
+            for run in &mut self.runs {
+                let count = run.counts[c];
+                run.counts[c] = sum;
+                sum += count;
+            }
+            live += usize::from(sum > *start);
+        }
+        self.start[cells] = sum;
+        self.live = live;
+
+        // 4. Placement.
+        self.place(positions, chunk, pool);
+    }
+
+    /// Lays the points out box by box (`members`, `sorted`), each run at its own places.
+    fn place(&mut self, positions: &[Vec3], chunk: usize, pool: Option<&rayon::ThreadPool>) {
+        let n = positions.len();
         self.members.resize(n, 0);
         self.sorted.resize(n, Vec3::zeros());
-        // NOTE: local slices, so the compiler knows the stores into one array do not change the
-        // others' pointers; and runs of points in one cell take consecutive slots from a
-        // register rather than from a counter in memory (see `assign_cells`).
-        let (start, members, sorted) = (
-            &mut self.start[..],
-            &mut self.members[..],
-            &mut self.sorted[..],
-        );
-        let cell_of = &self.cell_of[..];
-        let mut i = 0;
-        while i < n {
-            let c = cell_of[i] as usize;
-            let mut s = start[c];
-            loop {
-                members[s as usize] = i as u32;
-                sorted[s as usize] = positions[i];
-                s += 1;
-                i += 1;
-                if i == n || cell_of[i] as usize != c {
-                    break;
-                }
-            }
-            start[c] = s;
+        let places = Places {
+            members: self.members.as_mut_ptr(),
+            sorted: self.sorted.as_mut_ptr(),
+            len: n,
+        };
+        let each = |(r, (cells, run)): (usize, (&[u32], &mut Run))| {
+            place_run(&places, positions, r * chunk, cells, &mut run.counts);
+        };
+        let (cells, runs) = (&self.cell_of, &mut self.runs);
+        match pool {
+            Some(pool) if n > chunk => pool.install(|| {
+                cells
+                    .par_chunks(chunk)
+                    .zip(runs.par_iter_mut())
+                    .enumerate()
+                    .for_each(each);
+            }),
+            _ => cells
+                .chunks(chunk)
+                .zip(runs.iter_mut())
+                .enumerate()
+                .for_each(each),
         }
-        self.start.rotate_right(1);
-        self.start[0] = 0;
-    }
-
-    /// Makes `slots` an empty table of `table` slots (a new generation when the size is kept).
-    fn clear_table(&mut self, table: usize) {
-        if self.slots.len() != table {
-            self.slots.clear();
-            self.slots.resize(table, Slot::default());
-            self.stamp = 0;
-        }
-        self.stamp = self.stamp.wrapping_add(1);
-        if self.stamp == 0 {
-            // NOTE: after 2^32 rebuilds the stamps wrap; clear so no stale slot looks current.
-            self.slots.fill(Slot::default());
-            self.stamp = 1;
-        }
-    }
-
-    /// Gives every point the cell of its box key (cells numbered in order of first appearance)
-    /// and counts the points per cell into `start`; false, with the work abandoned, when the
-    /// boxes fill more than half the table.
-    fn assign_cells(&mut self, nw: usize) -> bool {
-        let n = self.key_of.len();
-        let table = self.slots.len();
-        let shift = 64 - table.trailing_zeros();
-        let mask = table - 1;
-        self.cell_of.resize(n, 0);
-        self.start.clear();
-        let (keys, cell_of, start) = (&self.key_of[..], &mut self.cell_of[..], &mut self.start);
-        let (slots, stamp) = (&mut self.slots[..], self.stamp);
-        // NOTE: runs of points in one box are counted in a register and added at the run's end:
-        // a memory counter bumped point after point waits for its own previous store.
-        let (mut run_cell, mut run_len) = (0u32, 0u32);
-        for i in 0..n {
-            let key = keys[i];
-            // NOTE: boxes are three spacings wide, so most points share the box of the point
-            // before them or of the one a row up. Taking the cell from them skips the probe
-            // (a cache miss on a big cloth) and hands out the same cell as the table would: a
-            // key seen before is in the table with that cell.
-            if i >= 1 && keys[i - 1] == key {
-                cell_of[i] = run_cell;
-                run_len += 1;
-                continue;
-            }
-            let cell = if i >= nw && keys[i - nw] == key {
-                cell_of[i - nw]
-            } else {
-                let cell = probe(slots, stamp, start, key, shift, mask);
-                if 2 * start.len() > table {
-                    return false;
-                }
-                cell
-            };
-            if run_len > 0 {
-                start[run_cell as usize] += run_len;
-            }
-            cell_of[i] = cell;
-            (run_cell, run_len) = (cell, 1);
-        }
-        if run_len > 0 {
-            start[run_cell as usize] += run_len;
-        }
-        true
     }
 
     /// The points in point `i`'s box (including `i`), in index order, as of the last rebuild.
     pub fn box_of(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
-        self.cell_members(i).iter().map(|&j| j as usize)
-    }
-
-    #[inline]
-    fn cell_members(&self, i: usize) -> &[u32] {
-        &self.members[self.cell_range(i)]
+        self.members[self.cell_range(i)].iter().map(|&j| j as usize)
     }
 
     /// Point `i`'s box as a range of `members` (and of `sorted`).
@@ -278,7 +514,6 @@ impl SpatialHash {
         let c = self.cell_of[i] as usize;
         self.start[c] as usize..self.start[c + 1] as usize
     }
-
     /// Pushes every unpinned point away from the other points of its box that are closer than
     /// `2 * thickness`, by the average correction divided by `steps_per_frame`.
     ///
@@ -297,7 +532,7 @@ impl SpatialHash {
         steps_per_frame: u32,
         pool: Option<&rayon::ThreadPool>,
     ) {
-        self.rebuild(mesh, positions);
+        self.rebuild_in(mesh, positions, pool);
         let repulsion = Repulsion::new(mesh, steps_per_frame);
         let pinned = mesh.pinned();
         // NOTE: a point's correction reads only the points of its own box, and only the
@@ -330,37 +565,6 @@ impl SpatialHash {
                 positions[i as usize] = *p;
             }
         }
-    }
-}
-
-/// The cell of `key`, from the open-addressing table `slots` (a new cell, counted in `start`,
-/// when the key is new).
-#[inline]
-fn probe(
-    slots: &mut [Slot],
-    stamp: u32,
-    start: &mut Vec<u32>,
-    key: u64,
-    shift: u32,
-    mask: usize,
-) -> u32 {
-    // Fibonacci hashing: the top bits of key * 2^64/phi spread neighbouring boxes.
-    let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
-    loop {
-        let s = &mut slots[slot];
-        if s.stamp != stamp {
-            *s = Slot {
-                key,
-                cell: start.len() as u32,
-                stamp,
-            };
-            start.push(0);
-            return s.cell;
-        }
-        if s.key == key {
-            return s.cell;
-        }
-        slot = (slot + 1) & mask;
     }
 }
 
@@ -550,6 +754,55 @@ mod tests {
                 .filter(|&j| box_index(&positions[j]) == box_index(&positions[i]))
                 .collect();
             assert_eq!(hash.box_of(i).collect::<Vec<_>>(), expected);
+        }
+    }
+
+    /// Every point's box listing, for comparing two hashes.
+    fn listings(hash: &SpatialHash, n: usize) -> Vec<Vec<usize>> {
+        (0..n).map(|i| hash.box_of(i).collect()).collect()
+    }
+
+    #[test]
+    fn a_hash_kept_across_rebuilds_lists_the_boxes_of_a_fresh_one() {
+        // A crumpled cloth that then drifts: a few points cross into neighbouring boxes each
+        // time (kept cells), the whole cloth moves into new boxes (new cells, the table grows),
+        // and after many moves the boxes left behind outnumber those in use (the table is
+        // cleared). With and without threads, the kept hash must list what a fresh one lists.
+        let mesh = ClothMesh::new(&GridSpec {
+            num_width_points: 160,
+            num_height_points: 100,
+            ..GridSpec::default()
+        })
+        .unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        let mut positions = scattered(mesh.len(), 21, -0.15, 0.15);
+        let mut rng = cloth_mesh::SplitMix64::new(22);
+        let (mut kept, mut kept_threaded) = (SpatialHash::default(), SpatialHash::default());
+        let box_w = SpatialHash::box_size(&mesh).0;
+        for round in 0..12 {
+            let drift = if round % 4 == 3 { 10.0 * box_w } else { 0.0 };
+            for p in &mut positions {
+                let h = 0.2 * box_w;
+                *p += Vec3::new(
+                    drift + rng.uniform(-h, h),
+                    rng.uniform(-h, h),
+                    rng.uniform(-h, h),
+                );
+            }
+            kept.rebuild(&mesh, &positions);
+            kept_threaded.rebuild_in(&mesh, &positions, Some(&pool));
+            let mut fresh = SpatialHash::default();
+            fresh.rebuild(&mesh, &positions);
+            let expected = listings(&fresh, mesh.len());
+            assert_eq!(listings(&kept, mesh.len()), expected, "round {round}");
+            assert_eq!(
+                listings(&kept_threaded, mesh.len()),
+                expected,
+                "round {round}"
+            );
         }
     }
 
