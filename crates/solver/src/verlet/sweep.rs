@@ -90,6 +90,8 @@ pub(crate) struct RowScratch {
     total: Vec<f64>,
     /// A row of zero forces, standing for the springs of rows past the last one.
     zeros: Vec<f64>,
+    /// The row stride `f` was laid out and zeroed for (0: never).
+    f_stride: usize,
 }
 
 impl Stencil {
@@ -231,7 +233,15 @@ impl Stencil {
         let (nw, nh) = (self.nw, self.nh);
         let stride = nw + 2 * PAD;
         scratch.pos.resize(3 * 3 * stride, 0.0);
-        scratch.f.resize(3 * 6 * 3 * stride, 0.0);
+        if scratch.f_stride != stride {
+            // NOTE: zeroed once per layout. Spring forces are only ever written to a
+            // direction's valid columns (or a whole row of zeros), so the columns outside them
+            // stay zero from here on, and `emit_row` need not clear them each row (that was
+            // 36 tiny `memset` calls a row).
+            scratch.f.clear();
+            scratch.f.resize(3 * 6 * 3 * stride, 0.0);
+            scratch.f_stride = stride;
+        }
         scratch.total.resize(3 * nw, 0.0);
         scratch.zeros.resize(nw, 0.0);
         for y in r0.saturating_sub(2)..r0 {
@@ -286,10 +296,6 @@ impl Stencil {
             }
             let (fx, rest_f) = out.split_at_mut(stride);
             let (fy, fz) = rest_f.split_at_mut(stride);
-            for f in [&mut *fx, &mut *fy, &mut *fz] {
-                f[..PAD + cols.start].fill(0.0);
-                f[PAD + cols.end..].fill(0.0);
-            }
             let a = (y % 3) * 3 * stride + PAD;
             let b = (partner_row as usize % 3) * 3 * stride + PAD;
             let b = (b as isize + dx) as usize;
@@ -461,5 +467,45 @@ mod tests {
         );
         assert_ne!(portable, last, "the sweep moved the points");
         assert_same_bits(&dispatched, &portable);
+    }
+
+    #[test]
+    fn a_scratch_reused_for_another_width_gives_the_bits_of_a_fresh_one() {
+        // The force ring's edge columns are zeroed once per layout: a scratch that swept a
+        // wider cloth (non-zero forces everywhere in its layout) must not leak them into a
+        // narrower one, nor a bending-free sweep (a row of zeros) into the next.
+        let params = |bending: f64| SweepParams {
+            k: [5000.0, 5000.0, 5000.0, 5000.0, bending, bending],
+            weight: Vec3::new(0.0, -0.0294, 0.0),
+            keep: 0.998,
+            scale: 1.0e-7 / 0.003,
+        };
+        let mut reused = RowScratch::default();
+        for (n, bending) in [(41, 1000.0), (29, 0.0), (29, 1000.0), (41, 1000.0)] {
+            let mesh = pinned_grid(n).unwrap();
+            let stencil = Stencil::new(&mesh).unwrap();
+            let mut rng = cloth_mesh::SplitMix64::new(n as u64);
+            let positions: Vec<Vec3> = mesh
+                .start_positions()
+                .iter()
+                .map(|p| p + Vec3::new(rng.uniform(-0.01, 0.01), 0.0, rng.uniform(-0.01, 0.01)))
+                .collect();
+            let (nh, pinned) = (stencil.nh(), mesh.pinned());
+            let run = |scratch: &mut RowScratch| {
+                let mut next = mesh.start_positions().to_vec();
+                stencil.sweep(
+                    scratch,
+                    &params(bending),
+                    &positions,
+                    pinned,
+                    &mut next,
+                    0,
+                    nh,
+                );
+                next
+            };
+            let fresh = run(&mut RowScratch::default());
+            assert_same_bits(&run(&mut reused), &fresh);
+        }
     }
 }
