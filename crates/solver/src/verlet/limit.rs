@@ -166,20 +166,17 @@ impl BandScratch {
                 look |= u8::from(moved[(margin + j).wrapping_add_signed(off)]) << t;
             }
             look &= exists;
-            if look == 0 {
-                continue;
-            }
-            let mut emitter_moved = false;
-            for (t, &off) in offsets.iter().enumerate() {
-                // NOTE: once the emitter has moved, each of its later springs needs the check.
-                let bit = 1u8 << t;
-                if exists & bit == 0 || (look & bit == 0 && !emitter_moved) {
-                    continue;
-                }
-                let b = j.wrapping_add_signed(off);
+            // NOTE: the springs to look at are visited by their bits, lowest (earliest in the
+            // course's order) first: one loop turn per check instead of six turns with an
+            // unpredictable branch each.
+            while look != 0 {
+                let t = look.trailing_zeros() as usize;
+                look &= look - 1;
+                let b = j.wrapping_add_signed(offsets[t]);
                 let rest = stencil.rest(t)[global];
                 if limit_one(j, b, rest, pinned, positions, ratio) {
-                    emitter_moved = true;
+                    // Once the emitter has moved, each of its later springs needs the check.
+                    look |= exists & !((2u8 << t) - 1);
                     moved[margin + j] = true;
                     moved[margin + b] = true;
                 }
