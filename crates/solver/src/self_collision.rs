@@ -757,6 +757,24 @@ mod tests {
         }
     }
 
+    /// The default cloth with `nw` x `nh` points.
+    fn cloth(nw: usize, nh: usize) -> ClothMesh {
+        ClothMesh::new(&GridSpec {
+            num_width_points: nw,
+            num_height_points: nh,
+            ..GridSpec::default()
+        })
+        .unwrap()
+    }
+
+    /// A pool of three threads: an odd count, so runs and boxes split unevenly.
+    fn three_threads() -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap()
+    }
+
     /// Every point's box listing, for comparing two hashes.
     fn listings(hash: &SpatialHash, n: usize) -> Vec<Vec<usize>> {
         (0..n).map(|i| hash.box_of(i).collect()).collect()
@@ -768,16 +786,8 @@ mod tests {
         // time (kept cells), the whole cloth moves into new boxes (new cells, the table grows),
         // and after many moves the boxes left behind outnumber those in use (the table is
         // cleared). With and without threads, the kept hash must list what a fresh one lists.
-        let mesh = ClothMesh::new(&GridSpec {
-            num_width_points: 160,
-            num_height_points: 100,
-            ..GridSpec::default()
-        })
-        .unwrap();
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(3)
-            .build()
-            .unwrap();
+        let mesh = cloth(160, 100);
+        let pool = three_threads();
         let mut positions = scattered(mesh.len(), 21, -0.15, 0.15);
         let mut rng = cloth_mesh::SplitMix64::new(22);
         let (mut kept, mut kept_threaded) = (SpatialHash::default(), SpatialHash::default());
@@ -846,19 +856,11 @@ mod tests {
     fn threads_make_the_same_corrections_bit_for_bit() {
         // 20,000 points crumpled into a 12 cm cube: many boxes with pairs in reach, split
         // between tasks at several places.
-        let mesh = ClothMesh::new(&GridSpec {
-            num_width_points: 200,
-            num_height_points: 100,
-            ..GridSpec::default()
-        })
-        .unwrap();
+        let mesh = cloth(200, 100);
         let start = scattered(mesh.len(), 13, 0.0, 0.12);
         let mut one = start.clone();
         SpatialHash::default().resolve(&mesh, &mut one, 30);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(3)
-            .build()
-            .unwrap();
+        let pool = three_threads();
         let mut three = start.clone();
         SpatialHash::default().resolve_in(&mesh, &mut three, 30, Some(&pool));
         let moved = one.iter().zip(&start).filter(|(a, b)| a != b).count();
