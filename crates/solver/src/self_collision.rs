@@ -23,6 +23,13 @@ use rayon::prelude::*;
 /// each box lists its points in index order whatever the thread count: the order in which the
 /// correction sums are taken, part of the faithful result.
 ///
+/// The resolution skips a box found clear at an earlier pass whose points have all stayed
+/// within a provably safe distance of where they were then (their anchors): such a box is still
+/// clear, so skipping it changes nothing (see [`Repulsion::allowance`]). On a settling cloth
+/// that is nearly every box; a box whose anchors keep being outrun waits longer and longer
+/// before it takes new ones, so a moving cloth does not pay for them. When no point changed
+/// box, the layout of the last rebuild is kept as it is.
+///
 /// Every pass is linear in the number of points or cells (at most about twice the boxes in use:
 /// the table is cleared when the cloth has left more boxes behind) and, once the arrays have
 /// grown, nothing is allocated.
@@ -49,10 +56,43 @@ pub struct SpatialHash {
     /// Point indices grouped by cell.
     members: Vec<u32>,
     /// The points' positions in `members` order: a box's points are contiguous, so the pair
-    /// loop reads consecutive memory instead of gathering from the whole cloth.
+    /// loop reads consecutive memory instead of gathering from the whole cloth. Filled by the
+    /// placement, or, when the layout was kept, by each box the resolution looks into.
     sorted: Vec<Vec3>,
+    /// Whether `sorted` holds the positions of the last rebuild (it was placed then).
+    sorted_fresh: bool,
+    /// Per point: its position when its box was last found clear, the position its
+    /// allowance is measured from.
+    anchor: Vec<Vec3>,
     /// Per cell: the resolution moved one of its points.
     touched: Vec<bool>,
+    /// Per cell: what the resolution remembers of the box.
+    memory: Vec<Memory>,
+}
+
+/// What the resolution remembers of a box between passes.
+#[derive(Debug, Clone, Copy)]
+struct Memory {
+    /// How far (squared) each of its points may move from its anchor with the box still
+    /// certainly clear of pairs within reach (see [`Repulsion::allowance`]); negative when the
+    /// box has no anchors.
+    allowed: f64,
+    /// Passes skipped on the current anchors.
+    skips: u32,
+    /// Looks at the box, found clear, before it may take anchors again.
+    wait: u32,
+    /// Anchors lost in a row without having paid for themselves; each doubles the wait.
+    strikes: u32,
+}
+
+impl Memory {
+    /// A box the resolution knows nothing of.
+    const NEW: Self = Self {
+        allowed: -1.0,
+        skips: 0,
+        wait: 0,
+        strikes: 0,
+    };
 }
 
 /// What a run of points keeps between the passes of a rebuild.
@@ -61,6 +101,9 @@ struct Run {
     counts: Vec<u32>,
     /// Points (from the run's first) whose cell is still to be found.
     misses: Vec<u32>,
+    /// Points (from the run's first) whose box changed since the last rebuild (only recorded
+    /// when the last rebuild's cells are valid).
+    changed: Vec<u32>,
 }
 
 /// A run's windows of `key_of`, `last_key_of` and `cell_of`, and its [`Run`].
@@ -184,6 +227,7 @@ impl CellPass<'_> {
         run.counts.clear();
         run.counts.resize(self.table.cells, 0);
         run.misses.clear();
+        run.changed.clear();
         let (counts, nw) = (&mut run.counts[..], self.nw);
         // NOTE: runs of points in one cell are counted in a register and added at the run's
         // end: a memory counter bumped point after point waits for its own previous store.
@@ -196,15 +240,20 @@ impl CellPass<'_> {
             // skipped and the cell is the one the table would give.
             let cell = if self.coherent && last_keys[k] == key {
                 cell_of[k]
-            } else if k >= 1 && keys[k - 1] == key && cell_of[k - 1] != PENDING {
-                cell_of[k - 1]
-            } else if k >= nw && keys[k - nw] == key && cell_of[k - nw] != PENDING {
-                cell_of[k - nw]
-            } else if let Some(cell) = self.table.find(key) {
-                cell
             } else {
-                run.misses.push(k as u32);
-                PENDING
+                if self.coherent {
+                    run.changed.push(k as u32);
+                }
+                if k >= 1 && keys[k - 1] == key && cell_of[k - 1] != PENDING {
+                    cell_of[k - 1]
+                } else if k >= nw && keys[k - nw] == key && cell_of[k - nw] != PENDING {
+                    cell_of[k - nw]
+                } else if let Some(cell) = self.table.find(key) {
+                    cell
+                } else {
+                    run.misses.push(k as u32);
+                    PENDING
+                }
             };
             cell_of[k] = cell;
             if cell != run_cell {
@@ -451,7 +500,28 @@ impl SpatialHash {
                 run.counts[self.cell_of[r * chunk + k as usize] as usize] += 1;
             }
         }
-        self.coherent = true;
+        let was_coherent = std::mem::replace(&mut self.coherent, true);
+        if !was_coherent {
+            self.memory.clear();
+        }
+        self.memory.resize(cells, Memory::NEW);
+        let mut any_changed = !was_coherent;
+        // NOTE: a box a point enters loses its allowance (a new pair may be close); a box a
+        // point leaves keeps it: its remaining pairs were all counted when it was computed.
+        for (r, run) in self.runs.iter().enumerate() {
+            for &k in &run.changed {
+                self.memory[self.cell_of[r * chunk + k as usize] as usize].allowed = -1.0;
+                any_changed = true;
+            }
+        }
+        if !any_changed {
+            // NOTE: every point kept its box, so every box keeps its points, in the same
+            // order: the layout (`start`, `members`) is the last one. A settled cloth gets here
+            // most steps. `sorted` is left as it is: the resolution refreshes the slots of the
+            // boxes it looks into.
+            self.sorted_fresh = false;
+            return;
+        }
 
         // 3. Exclusive prefix sum over the cells, run within cell: each run's count per cell
         //    becomes its first place there.
@@ -501,6 +571,7 @@ impl SpatialHash {
                 .enumerate()
                 .for_each(each),
         }
+        self.sorted_fresh = true;
     }
 
     /// The points in point `i`'s box (including `i`), in index order, as of the last rebuild.
@@ -534,30 +605,42 @@ impl SpatialHash {
     ) {
         self.rebuild_in(mesh, positions, pool);
         let repulsion = Repulsion::new(mesh, steps_per_frame);
-        let pinned = mesh.pinned();
         // NOTE: a point's correction reads only the points of its own box, and only the
         // points of that box write them, so boxes are independent: sweeping box by box, each
         // box's points in index order, makes exactly the corrections of the course's sweep over
         // all points in index order. That lets a box with no pair within reach at the start of
         // the pass (most of them) be skipped after one look at each pair, half the work of
-        // asking every point about every other; and it lets threads take whole boxes.
+        // asking every point about every other; a box whose points have barely moved since it
+        // was last found clear is skipped without even that (see `Repulsion::allowance`); and
+        // threads can take whole boxes.
         // The boxes correct `sorted` (their own contiguous runs), on the pool's threads when
         // there is one, and mark themselves when they moved a point; then the points of the
         // marked boxes (few) take their positions back from their slots.
         let cells = self.start.len() - 1;
         self.touched.clear();
         self.touched.resize(cells, false);
+        self.anchor.resize(positions.len(), Vec3::zeros());
         let boxes = Boxes {
             repulsion: &repulsion,
-            pinned,
+            pinned: mesh.pinned(),
             start: &self.start,
             members: &self.members,
+            positions,
+            sorted_fresh: self.sorted_fresh,
+            anchors: Anchors {
+                anchor: self.anchor.as_mut_ptr(),
+                len: self.anchor.len(),
+            },
             threaded: pool.is_some(),
         };
-        let (sorted, touched) = (&mut self.sorted[..], &mut self.touched[..]);
+        let cuts = Cuts {
+            sorted: &mut self.sorted,
+            touched: &mut self.touched,
+            memory: &mut self.memory[..cells],
+        };
         match pool {
-            Some(pool) => pool.install(|| boxes.resolve(sorted, touched, 0..cells, 0)),
-            None => boxes.resolve(sorted, touched, 0..cells, 0),
+            Some(pool) => pool.install(|| boxes.resolve(cuts, 0..cells, 0)),
+            None => boxes.resolve(cuts, 0..cells, 0),
         }
         for (c, _) in self.touched.iter().enumerate().filter(|(_, t)| **t) {
             let range = self.start[c] as usize..self.start[c + 1] as usize;
@@ -568,35 +651,14 @@ impl SpatialHash {
     }
 }
 
+/// Looks a box that outran its allowance waits before it takes new anchors, at first.
+const ANCHOR_WAIT: u32 = 4;
+
+/// The most times the wait doubles (to 256 looks).
+const MAX_STRIKES: u32 = 6;
+
 /// Points a thread takes at once in the threaded passes: enough to amortise rayon's task cost.
 const PARALLEL_CHUNK: usize = 4096;
-
-/// Resolves one box in place: `box_points` are its points' positions in index order (a run of
-/// `sorted`) and `members` their indices. True when some point moved.
-#[inline]
-fn resolve_box(
-    repulsion: &Repulsion,
-    pinned: &[bool],
-    members: &[u32],
-    box_points: &mut [Vec3],
-) -> bool {
-    if !repulsion.any_pair_within_reach(box_points) {
-        return false;
-    }
-    let mut any = false;
-    for (k, &i) in members.iter().enumerate() {
-        let i = i as usize;
-        if pinned[i] {
-            continue;
-        }
-        if let Some(p) = repulsion.corrected(box_points, k) {
-            // NOTE: later points of the box see this correction, as in the course.
-            box_points[k] = p;
-            any = true;
-        }
-    }
-    any
-}
 
 /// What the self-collision pass shares between its tasks.
 struct Boxes<'a> {
@@ -604,30 +666,82 @@ struct Boxes<'a> {
     pinned: &'a [bool],
     start: &'a [u32],
     members: &'a [u32],
+    /// The positions at the start of the pass (corrections go to `sorted`).
+    positions: &'a [Vec3],
+    /// Whether `sorted` already holds `positions`.
+    sorted_fresh: bool,
+    anchors: Anchors,
     /// Whether to split the boxes between the current pool's threads.
     threaded: bool,
 }
 
+/// The points' anchors as the tasks of the pass share them.
+///
+/// NOTE: a raw pointer because a task reads and writes the anchors of its boxes' points, which
+/// are scattered over the cloth (a box holds a few points from each of a few rows), so no safe
+/// split of the array can hand them out.
+struct Anchors {
+    anchor: *mut Vec3,
+    len: usize,
+}
+
+// SAFETY: `Anchors` is only used by `Boxes::resolve_box`, which touches the anchors of its own
+// box's points only; every point is in exactly one box and every box is resolved by one task.
+#[allow(unsafe_code)]
+unsafe impl Sync for Anchors {}
+
+impl Anchors {
+    /// Point `i`'s anchor.
+    ///
+    /// # Safety
+    /// No other thread may write it at the same time.
+    #[allow(unsafe_code)]
+    #[inline]
+    unsafe fn get(&self, i: usize) -> Vec3 {
+        assert!(i < self.len, "an anchor past the end of the cloth");
+        // SAFETY: in bounds (just checked); the caller guarantees no concurrent write.
+        unsafe { *self.anchor.add(i) }
+    }
+
+    /// Sets point `i`'s anchor.
+    ///
+    /// # Safety
+    /// No other thread may read or write it at the same time.
+    #[allow(unsafe_code)]
+    #[inline]
+    unsafe fn set(&self, i: usize, p: Vec3) {
+        assert!(i < self.len, "an anchor past the end of the cloth");
+        // SAFETY: in bounds (just checked); the caller guarantees exclusive access.
+        unsafe { *self.anchor.add(i) = p }
+    }
+}
+
+/// The per-slot and per-cell arrays a task of the pass writes: windows starting at a slot and
+/// at a cell.
+struct Cuts<'a> {
+    sorted: &'a mut [Vec3],
+    touched: &'a mut [bool],
+    memory: &'a mut [Memory],
+}
+
 impl Boxes<'_> {
-    /// Resolves `cells` (whose points are `sorted`, a window starting at slot `offset`, and
-    /// whose flags are `touched`, a window starting at cell `cells.start`); when threaded,
-    /// halving the run of boxes between threads down to about [`PARALLEL_CHUNK`] points.
-    /// Recursion rather than a list of chunks, so nothing is allocated.
-    fn resolve(
-        &self,
-        sorted: &mut [Vec3],
-        touched: &mut [bool],
-        cells: std::ops::Range<usize>,
-        offset: usize,
-    ) {
+    /// Resolves `cells` (whose points' slots start at `offset`, and whose per-cell windows in
+    /// `cuts` start at `cells.start`); when threaded, halving the run of boxes between threads
+    /// down to about [`PARALLEL_CHUNK`] points. Recursion rather than a list of chunks, so
+    /// nothing is allocated.
+    fn resolve(&self, cuts: Cuts<'_>, cells: std::ops::Range<usize>, offset: usize) {
+        let Cuts {
+            sorted,
+            touched,
+            memory,
+        } = cuts;
         let start = self.start;
         let (lo, hi) = (start[cells.start] as usize, start[cells.end] as usize);
         if !self.threaded || hi - lo <= PARALLEL_CHUNK || cells.len() < 2 {
-            for (c, touched) in cells.clone().zip(touched) {
+            for (c, (touched, memory)) in cells.zip(touched.iter_mut().zip(memory)) {
                 let range = start[c] as usize..start[c + 1] as usize;
                 let window = range.start - offset..range.end - offset;
-                let members = &self.members[range];
-                *touched = resolve_box(self.repulsion, self.pinned, members, &mut sorted[window]);
+                *touched = self.resolve_box(&self.members[range], &mut sorted[window], memory);
             }
             return;
         }
@@ -637,12 +751,94 @@ impl Boxes<'_> {
         let mid = (cells.start + start[cells.clone()].partition_point(|&s| (s as usize) <= half))
             .clamp(cells.start + 1, cells.end - 1);
         let split = start[mid] as usize;
-        let (left, right) = sorted.split_at_mut(split - offset);
+        let (sorted_left, sorted_right) = sorted.split_at_mut(split - offset);
         let (touched_left, touched_right) = touched.split_at_mut(mid - cells.start);
+        let (memory_left, memory_right) = memory.split_at_mut(mid - cells.start);
+        let left = Cuts {
+            sorted: sorted_left,
+            touched: touched_left,
+            memory: memory_left,
+        };
+        let right = Cuts {
+            sorted: sorted_right,
+            touched: touched_right,
+            memory: memory_right,
+        };
         rayon::join(
-            || self.resolve(left, touched_left, cells.start..mid, offset),
-            || self.resolve(right, touched_right, mid..cells.end, split),
+            || self.resolve(left, cells.start..mid, offset),
+            || self.resolve(right, mid..cells.end, split),
         );
+    }
+
+    /// Resolves one box: `members` are its points' indices in index order, `slots` its run of
+    /// `sorted`, `memory` what is known of it (updated). True when it moved a point.
+    #[inline]
+    fn resolve_box(&self, members: &[u32], slots: &mut [Vec3], memory: &mut Memory) -> bool {
+        // A lone point has no pair.
+        if members.len() < 2 {
+            return false;
+        }
+        // SAFETY (both blocks): only this box's points' anchors are touched, and only this
+        // task resolves this box (see `Anchors`).
+        // NOTE: a box whose points all stayed within its allowance of their anchors is still
+        // clear (see `Repulsion::allowance`): nothing to do. A NaN distance fails the test, so
+        // a diverged point is always looked at.
+        if memory.allowed >= 0.0 {
+            #[allow(unsafe_code)]
+            if members.iter().all(|&i| {
+                let i = i as usize;
+                dist2(&(self.positions[i] - unsafe { self.anchors.get(i) })) <= memory.allowed
+            }) {
+                memory.skips += 1;
+                return false;
+            }
+            // NOTE: the box outran its allowance. Anchors that saved fewer than two looks cost
+            // more than they saved (writing them, testing them), so such a box waits before it
+            // takes new ones, twice as long each time: a moving cloth soon stops paying for
+            // anchors, a settling one gets them back.
+            memory.strikes = if memory.skips < 2 {
+                (memory.strikes + 1).min(MAX_STRIKES)
+            } else {
+                0
+            };
+            memory.wait = ANCHOR_WAIT << memory.strikes;
+            memory.allowed = -1.0;
+        }
+        if !self.sorted_fresh {
+            for (slot, &i) in slots.iter_mut().zip(members) {
+                *slot = self.positions[i as usize];
+            }
+        }
+        if let Some(closest2) = self.repulsion.closest_pair_out_of_reach(slots) {
+            if memory.wait > 0 {
+                memory.wait -= 1;
+                return false;
+            }
+            memory.allowed = self.repulsion.allowance(closest2);
+            if memory.allowed >= 0.0 {
+                memory.skips = 0;
+                for (slot, &i) in slots.iter().zip(members) {
+                    #[allow(unsafe_code)]
+                    unsafe {
+                        self.anchors.set(i as usize, *slot);
+                    }
+                }
+            }
+            return false;
+        }
+        memory.allowed = -1.0;
+        let mut any = false;
+        for (k, &i) in members.iter().enumerate() {
+            if self.pinned[i as usize] {
+                continue;
+            }
+            if let Some(p) = self.repulsion.corrected(slots, k) {
+                // NOTE: later points of the box see this correction, as in the course.
+                slots[k] = p;
+                any = true;
+            }
+        }
+        any
     }
 }
 
@@ -671,16 +867,52 @@ impl Repulsion {
         }
     }
 
-    /// Whether any two of `members` are closer than the reach, by the test `corrected` skips
-    /// pairs with (`d^2` is the same bits whichever point comes first: `a - b` is exactly
-    /// `-(b - a)`).
+    /// The smallest squared distance between two of `members`, or `None` when some pair is
+    /// within reach by the test `corrected` skips pairs with (`d^2` is the same bits whichever
+    /// point comes first: `a - b` is exactly `-(b - a)`). Infinite for fewer than two points.
     #[inline]
-    fn any_pair_within_reach(&self, members: &[Vec3]) -> bool {
-        members.iter().enumerate().any(|(k, p)| {
-            members[k + 1..]
-                .iter()
-                .any(|q| dist2(&(p - q)) < self.reach2_out)
-        })
+    fn closest_pair_out_of_reach(&self, members: &[Vec3]) -> Option<f64> {
+        // NOTE: the minimum of the bit patterns: squared distances are never negative, and
+        // non-negative floats order as their bits do (a NaN above infinity, so it is only the
+        // minimum when every distance is NaN). An integer minimum is one cheap instruction;
+        // `f64::min`'s NaN handling is several, and this loop runs over every pair.
+        let mut closest = f64::INFINITY.to_bits();
+        for (k, p) in members.iter().enumerate() {
+            for q in &members[k + 1..] {
+                let d2 = dist2(&(p - q));
+                if d2 < self.reach2_out {
+                    return None;
+                }
+                closest = closest.min(d2.to_bits());
+            }
+        }
+        Some(f64::from_bits(closest))
+    }
+
+    /// How far (squared) each point of a box found clear may move from where it is, with the
+    /// box still certainly clear, given the smallest squared distance `closest2` between two of
+    /// its points; negative when no move is safe.
+    ///
+    /// Two points that each moved less than `a` are closer than before by less than `2 a`
+    /// (triangle inequality), so with `a = (closest - reach) / 2` every pair stays at least
+    /// `reach` apart, and [`Repulsion::closest_pair_out_of_reach`] would find the box clear
+    /// again. Why that holds in floating point too: every quantity here and in the displacement
+    /// test (a squared distance, its root, a product) is within a few ulps, under 1e-15
+    /// relative, of its real value; each term below is shrunk (or, for the reach, grown) by
+    /// 1e-12 relative, a thousand times that, and the 4-ulp margin of `reach2_out` lies well
+    /// inside it. So a box skipped by the test is one whose pair test would have found no pair
+    /// within reach: skipping it changes nothing, bit for bit.
+    #[inline]
+    fn allowance(&self, closest2: f64) -> f64 {
+        const SLACK: f64 = 1e-12;
+        let spare = closest2.sqrt() * (1.0 - SLACK) - self.reach * (1.0 + SLACK);
+        let each = spare / 2.0 * (1.0 - SLACK);
+        // NOTE: finite only: a box with points at infinity (a diverged step) gets no anchors.
+        if each > 0.0 && each.is_finite() {
+            each * each * (1.0 - SLACK)
+        } else {
+            -1.0
+        }
     }
 
     /// The corrected position of the point at `me` among the `members` of its box (their
@@ -850,6 +1082,59 @@ mod tests {
         let moved = course.iter().zip(&start).filter(|(a, b)| a != b).count();
         assert!(moved > mesh.len() / 2, "the test must exercise corrections");
         assert_same_bits(&fast, &course);
+    }
+
+    #[test]
+    fn boxes_skipped_on_their_allowance_make_the_corrections_of_a_fresh_hash() {
+        // A flat cloth whose boxes are clear (spacing 1 cm, reach 4 mm) trembles by a few
+        // micrometres a step, so boxes keep their anchors and are skipped; meanwhile one point
+        // walks towards its neighbour and comes within reach (a skip must not hide it), and at
+        // step 30 a band of rows jumps a third of a box (the layout changes). A hash kept across
+        // the steps, with and without threads, must correct exactly as a fresh hash that has
+        // no memory and so looks into every box.
+        let mesh = ClothMesh::new(&GridSpec {
+            num_width_points: 100,
+            num_height_points: 100,
+            thickness: 0.002,
+            ..GridSpec::default()
+        })
+        .unwrap();
+        let pool = three_threads();
+        let (walker, neighbour) = (mesh.index(50, 50), mesh.index(51, 50));
+        let box_w = SpatialHash::box_size(&mesh).0;
+        let mut rng = cloth_mesh::SplitMix64::new(31);
+        let mut positions = mesh.start_positions().to_vec();
+        let (mut kept, mut kept_threaded) = (SpatialHash::default(), SpatialHash::default());
+        let (mut skipped, mut walker_pushed) = (0, false);
+        for step in 0..60 {
+            for p in &mut positions {
+                let h = 2e-5;
+                *p += Vec3::new(rng.uniform(-h, h), rng.uniform(-h, h), rng.uniform(-h, h));
+            }
+            let towards = positions[neighbour] - positions[walker];
+            positions[walker] += towards * 0.05;
+            if step == 30 {
+                for p in &mut positions[mesh.index(0, 10)..mesh.index(0, 15)] {
+                    p.x += box_w / 3.0;
+                }
+            }
+            let mut fresh = positions.clone();
+            SpatialHash::default().resolve(&mesh, &mut fresh, 30);
+            let mut one = positions.clone();
+            kept.resolve(&mesh, &mut one, 30);
+            let mut three = positions.clone();
+            kept_threaded.resolve_in(&mesh, &mut three, 30, Some(&pool));
+            assert_same_bits(&one, &fresh);
+            assert_same_bits(&three, &fresh);
+            skipped += kept.memory.iter().filter(|m| m.skips > 0).count();
+            walker_pushed |= fresh[walker] != positions[walker];
+            positions = fresh;
+        }
+        assert!(
+            skipped > 1000,
+            "the test must exercise skipped boxes ({skipped})"
+        );
+        assert!(walker_pushed, "the walker must come within reach");
     }
 
     #[test]
