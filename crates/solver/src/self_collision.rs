@@ -789,7 +789,7 @@ impl Boxes<'_> {
                 let i = i as usize;
                 dist2(&(self.positions[i] - unsafe { self.anchors.get(i) })) <= memory.allowed
             }) {
-                memory.skips += 1;
+                memory.skips = memory.skips.saturating_add(1);
                 return false;
             }
             // NOTE: the box outran its allowance. Anchors that saved fewer than two looks cost
