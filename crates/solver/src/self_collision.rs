@@ -25,7 +25,7 @@ use rayon::prelude::*;
 ///
 /// The resolution skips a box found clear at an earlier pass whose points have all stayed
 /// within a provably safe distance of where they were then (their anchors): such a box is still
-/// clear, so skipping it changes nothing (see [`Repulsion::allowance`]). On a settling cloth
+/// clear, so skipping it changes nothing (see `Repulsion::allowance`). On a settling cloth
 /// that is nearly every box; a box whose anchors keep being outrun waits longer and longer
 /// before it takes new ones, so a moving cloth does not pay for them. When no point changed
 /// box, the layout of the last rebuild is kept as it is.
