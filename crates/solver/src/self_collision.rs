@@ -270,41 +270,66 @@ impl CellPass<'_> {
     }
 }
 
-/// `members` and `sorted` as the placement's runs share them.
+/// A slice that several threads read and write at once, each at its own indices.
 ///
-/// NOTE: raw pointers because the runs write interleaved, disjoint places of the same arrays
-/// (each run has its own places in every box), which no safe split of a slice can express.
-struct Places {
-    members: *mut u32,
-    sorted: *mut Vec3,
+/// NOTE: the threaded passes write interleaved or scattered but disjoint elements of one array
+/// (the placement: each run has its own places in every box; the resolution: each box the
+/// anchors of its own points, a few from each of a few rows), which no safe split of a slice
+/// can express. Holding the exclusive borrow keeps anything else off the array meanwhile.
+struct Disjoint<'a, T> {
+    ptr: *mut T,
     len: usize,
+    _borrow: std::marker::PhantomData<&'a mut [T]>,
 }
 
-// SAFETY: `Places` is only used by `place_run`, whose runs write disjoint places.
+// SAFETY: the threads sharing a `Disjoint` touch disjoint elements (each use says why), and `T`
+// is sent between them.
 #[allow(unsafe_code)]
-unsafe impl Sync for Places {}
+unsafe impl<T: Send> Sync for Disjoint<'_, T> {}
 
-impl Places {
-    /// Writes point `i` at `place`.
+impl<'a, T: Copy> Disjoint<'a, T> {
+    fn new(slice: &'a mut [T]) -> Self {
+        Self {
+            ptr: slice.as_mut_ptr(),
+            len: slice.len(),
+            _borrow: std::marker::PhantomData,
+        }
+    }
+
+    /// Element `i`.
     ///
     /// # Safety
-    /// No other thread may write `place` at the same time.
+    /// No other thread may write element `i` at the same time.
     #[allow(unsafe_code)]
     #[inline]
-    unsafe fn put(&self, place: u32, i: usize, p: Vec3) {
-        let place = place as usize;
-        assert!(place < self.len, "a place past the end of the layout");
+    unsafe fn get(&self, i: usize) -> T {
+        assert!(i < self.len, "an index past the end of a shared slice");
         // SAFETY: in bounds (just checked); the caller guarantees no concurrent write.
-        unsafe {
-            *self.members.add(place) = i as u32;
-            *self.sorted.add(place) = p;
-        }
+        unsafe { *self.ptr.add(i) }
+    }
+
+    /// Sets element `i`.
+    ///
+    /// # Safety
+    /// No other thread may read or write element `i` at the same time.
+    #[allow(unsafe_code)]
+    #[inline]
+    unsafe fn set(&self, i: usize, value: T) {
+        assert!(i < self.len, "an index past the end of a shared slice");
+        // SAFETY: in bounds (just checked); the caller guarantees exclusive access.
+        unsafe { *self.ptr.add(i) = value }
     }
 }
 
 /// Places the run of points starting at `first` (whose cells are `cell_of`) at their places,
 /// `next[c]` being the run's next place in cell `c`.
-fn place_run(places: &Places, positions: &[Vec3], first: usize, cell_of: &[u32], next: &mut [u32]) {
+fn place_run(
+    (members, sorted): (&Disjoint<'_, u32>, &Disjoint<'_, Vec3>),
+    positions: &[Vec3],
+    first: usize,
+    cell_of: &[u32],
+    next: &mut [u32],
+) {
     let n = cell_of.len();
     let mut k = 0;
     while k < n {
@@ -317,7 +342,8 @@ fn place_run(places: &Places, positions: &[Vec3], first: usize, cell_of: &[u32],
             // cell's; only this run writes them, each once.
             #[allow(unsafe_code)]
             unsafe {
-                places.put(place, first + k, positions[first + k]);
+                members.set(place as usize, (first + k) as u32);
+                sorted.set(place as usize, positions[first + k]);
             }
             place += 1;
             k += 1;
@@ -548,13 +574,18 @@ impl SpatialHash {
         let n = positions.len();
         self.members.resize(n, 0);
         self.sorted.resize(n, Vec3::zeros());
-        let places = Places {
-            members: self.members.as_mut_ptr(),
-            sorted: self.sorted.as_mut_ptr(),
-            len: n,
-        };
+        let (members, sorted) = (
+            Disjoint::new(&mut self.members),
+            Disjoint::new(&mut self.sorted),
+        );
         let each = |(r, (cells, run)): (usize, (&[u32], &mut Run))| {
-            place_run(&places, positions, r * chunk, cells, &mut run.counts);
+            place_run(
+                (&members, &sorted),
+                positions,
+                r * chunk,
+                cells,
+                &mut run.counts,
+            );
         };
         let (cells, runs) = (&self.cell_of, &mut self.runs);
         match pool {
@@ -627,10 +658,7 @@ impl SpatialHash {
             members: &self.members,
             positions,
             sorted_fresh: self.sorted_fresh,
-            anchors: Anchors {
-                anchor: self.anchor.as_mut_ptr(),
-                len: self.anchor.len(),
-            },
+            anchors: Disjoint::new(&mut self.anchor),
             threaded: pool.is_some(),
         };
         let cuts = Cuts {
@@ -670,50 +698,10 @@ struct Boxes<'a> {
     positions: &'a [Vec3],
     /// Whether `sorted` already holds `positions`.
     sorted_fresh: bool,
-    anchors: Anchors,
+    /// The points' anchors; a box's task reads and writes those of its own points.
+    anchors: Disjoint<'a, Vec3>,
     /// Whether to split the boxes between the current pool's threads.
     threaded: bool,
-}
-
-/// The points' anchors as the tasks of the pass share them.
-///
-/// NOTE: a raw pointer because a task reads and writes the anchors of its boxes' points, which
-/// are scattered over the cloth (a box holds a few points from each of a few rows), so no safe
-/// split of the array can hand them out.
-struct Anchors {
-    anchor: *mut Vec3,
-    len: usize,
-}
-
-// SAFETY: `Anchors` is only used by `Boxes::resolve_box`, which touches the anchors of its own
-// box's points only; every point is in exactly one box and every box is resolved by one task.
-#[allow(unsafe_code)]
-unsafe impl Sync for Anchors {}
-
-impl Anchors {
-    /// Point `i`'s anchor.
-    ///
-    /// # Safety
-    /// No other thread may write it at the same time.
-    #[allow(unsafe_code)]
-    #[inline]
-    unsafe fn get(&self, i: usize) -> Vec3 {
-        assert!(i < self.len, "an anchor past the end of the cloth");
-        // SAFETY: in bounds (just checked); the caller guarantees no concurrent write.
-        unsafe { *self.anchor.add(i) }
-    }
-
-    /// Sets point `i`'s anchor.
-    ///
-    /// # Safety
-    /// No other thread may read or write it at the same time.
-    #[allow(unsafe_code)]
-    #[inline]
-    unsafe fn set(&self, i: usize, p: Vec3) {
-        assert!(i < self.len, "an anchor past the end of the cloth");
-        // SAFETY: in bounds (just checked); the caller guarantees exclusive access.
-        unsafe { *self.anchor.add(i) = p }
-    }
 }
 
 /// The per-slot and per-cell arrays a task of the pass writes: windows starting at a slot and
@@ -779,7 +767,7 @@ impl Boxes<'_> {
             return false;
         }
         // SAFETY (both blocks): only this box's points' anchors are touched, and only this
-        // task resolves this box (see `Anchors`).
+        // task resolves this box.
         // NOTE: a box whose points all stayed within its allowance of their anchors is still
         // clear (see `Repulsion::allowance`): nothing to do. A NaN distance fails the test, so
         // a diverged point is always looked at.
