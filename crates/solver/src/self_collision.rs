@@ -907,9 +907,6 @@ impl Repulsion {
     /// positions, in index order), or `None` when no other member is within reach.
     #[inline]
     fn corrected(&self, members: &[Vec3], me: usize) -> Option<Vec3> {
-        if members.len() < 2 {
-            return None;
-        }
         let p = members[me];
         let mut correction = Vec3::zeros();
         let mut count = 0u32;
