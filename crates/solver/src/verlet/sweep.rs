@@ -37,6 +37,9 @@ use cloth_mesh::{ClothMesh, GridSpec, SpringKind, Vec3};
 
 use crate::SolveError;
 
+#[cfg(target_arch = "x86_64")]
+mod fused;
+
 /// The six springs a point emits, in the course's emission order: `(dx, dy, kind)`.
 pub(crate) const DIRECTIONS: [(isize, isize, SpringKind); 6] = [
     (-1, 0, SpringKind::Structural),
@@ -213,7 +216,7 @@ impl Stencil {
         r0: usize,
         r1: usize,
     ) {
-        self.sweep_portable(scratch, params, positions, pinned, next, r0, r1);
+        self.sweep_rows::<true>(scratch, params, positions, pinned, next, r0, r1);
     }
 
     /// The sweep itself, for whatever instruction set the caller was compiled for: everything
@@ -221,6 +224,24 @@ impl Stencil {
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(crate) fn sweep_portable(
+        &self,
+        scratch: &mut RowScratch,
+        params: &SweepParams,
+        positions: &[Vec3],
+        pinned: &[bool],
+        next: &mut [Vec3],
+        r0: usize,
+        r1: usize,
+    ) {
+        self.sweep_rows::<false>(scratch, params, positions, pinned, next, r0, r1);
+    }
+
+    /// The sweep's row loop. With `FUSED`, the rows that can take it emit their springs and sum
+    /// the forces two rows behind in one AVX2 pass (`fused`); `FUSED` must only be set in a
+    /// build for AVX2 ([`Stencil::sweep_avx2`]).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn sweep_rows<const FUSED: bool>(
         &self,
         scratch: &mut RowScratch,
         params: &SweepParams,
@@ -248,13 +269,27 @@ impl Stencil {
             self.load_row(scratch, positions, y);
         }
         for y in r0..(r1 + 2) {
+            // Rows before `r0 + 2` have no row of this band to sum; past the last row there is
+            // nothing to emit.
+            let fuse = FUSED && y >= r0 + 2 && self.fusable(params, y);
             if y < nh {
                 self.load_row(scratch, positions, y);
-                self.emit_row(scratch, params, y);
+                if fuse {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: `FUSED` is set only by `sweep_avx2`, which runs on AVX2 CPUs.
+                    #[allow(unsafe_code)]
+                    unsafe {
+                        self.emit_and_sum_avx2(scratch, params, y);
+                    }
+                } else {
+                    self.emit_row(scratch, params, y);
+                }
             }
             if y >= r0 + 2 {
                 let r = y - 2;
-                self.sum_row(scratch, params, r);
+                if !fuse {
+                    self.sum_row(scratch, params, r);
+                }
                 let row = &mut next[(r - r0) * nw..(r - r0 + 1) * nw];
                 integrate_row(
                     &scratch.total,
@@ -420,12 +455,19 @@ mod tests {
     use crate::pinned_grid;
     use crate::testing::assert_same_bits;
 
-    #[test]
-    fn the_dispatched_sweep_has_the_bits_of_the_portable_one() {
-        // Scattered positions and velocities so every lane sees different lengths, a
-        // zero-length spring, and ragged row ends (53 is not a multiple of any lane count).
-        let mesh = pinned_grid(53).unwrap();
-        let mut rng = cloth_mesh::SplitMix64::new(11);
+    /// Sweeps rows `rows` of a `nw` x `nh` cloth, jittered by `seed`, with the dispatched
+    /// (AVX2 and fused, on such CPUs) and the portable sweep, and asserts the same bits.
+    fn assert_dispatch_matches_portable(nw: usize, nh: usize, rows: std::ops::Range<usize>) {
+        let mesh = ClothMesh::new(&GridSpec {
+            width: nw as f64 / 49.0,
+            height: nh as f64 / 49.0,
+            num_width_points: nw,
+            num_height_points: nh,
+            pinned: vec![(0, 0), (nw - 1, 0)],
+            ..GridSpec::default()
+        })
+        .unwrap();
+        let mut rng = cloth_mesh::SplitMix64::new((nw * 1000 + nh) as u64);
         let mut jitter = |p: &Vec3| {
             p + Vec3::new(
                 rng.uniform(-0.01, 0.01),
@@ -434,7 +476,8 @@ mod tests {
             )
         };
         let mut positions: Vec<Vec3> = mesh.start_positions().iter().map(&mut jitter).collect();
-        positions[100] = positions[99];
+        // A zero-length spring inside the fused pass's rows and columns (direction 0 of (3, 2)).
+        positions[2 * nw + 3] = positions[2 * nw + 2];
         let last: Vec<Vec3> = positions.iter().map(&mut jitter).collect();
         let stencil = Stencil::new(&mesh).unwrap();
         let params = SweepParams {
@@ -443,30 +486,50 @@ mod tests {
             keep: 0.998,
             scale: 1.0e-7 / 0.003,
         };
-        let (nh, pinned) = (stencil.nh(), mesh.pinned());
-        let mut dispatched = last.clone();
+        let band = rows.start * nw..rows.end * nw;
+        let pinned = mesh.pinned();
+        let mut dispatched = last[band.clone()].to_vec();
         stencil.sweep(
             &mut RowScratch::default(),
             &params,
             &positions,
             pinned,
             &mut dispatched,
-            0,
-            nh,
+            rows.start,
+            rows.end,
         );
-        let mut portable = last.clone();
-        let mut scratch = RowScratch::default();
+        let mut portable = last[band.clone()].to_vec();
         stencil.sweep_portable(
-            &mut scratch,
+            &mut RowScratch::default(),
             &params,
             &positions,
             pinned,
             &mut portable,
-            0,
-            nh,
+            rows.start,
+            rows.end,
         );
-        assert_ne!(portable, last, "the sweep moved the points");
+        assert_ne!(portable, last[band], "the sweep moved the points");
         assert_same_bits(&dispatched, &portable);
+    }
+
+    #[test]
+    fn the_dispatched_sweep_has_the_bits_of_the_portable_one() {
+        // Scattered positions and velocities so every lane sees different lengths, a
+        // zero-length spring, and ragged row ends (53 is not a multiple of any lane count).
+        assert_dispatch_matches_portable(53, 53, 0..53);
+    }
+
+    #[test]
+    fn narrow_rows_and_bands_keep_the_portable_bits() {
+        // 4 wide: one four-lane group holds both edges. 5 to 7: the last group overlaps the
+        // one before it. 3: too narrow for the fused pass. Bands starting and ending inside
+        // the cloth, as threads sweep them, sum rows whose partners lie outside the band.
+        for nw in [3, 4, 5, 6, 7, 8, 9] {
+            assert_dispatch_matches_portable(nw, 9, 0..9);
+        }
+        assert_dispatch_matches_portable(21, 17, 5..11);
+        assert_dispatch_matches_portable(21, 17, 1..2);
+        assert_dispatch_matches_portable(21, 17, 14..17);
     }
 
     #[test]
