@@ -190,7 +190,7 @@ impl Stencil {
             }
             return;
         }
-        self.sweep_portable(scratch, params, positions, pinned, next, r0, r1);
+        self.sweep_rows::<false>(scratch, params, positions, pinned, next, r0, r1);
     }
 
     /// The sweep compiled for AVX2: four f64 lanes per instruction instead of baseline
@@ -220,28 +220,13 @@ impl Stencil {
     }
 
     /// The sweep itself, for whatever instruction set the caller was compiled for: everything
-    /// it calls is inlined into it, so [`Stencil::sweep_avx2`] vectorises all of it.
+    /// it calls is inlined into it, so [`Stencil::sweep_avx2`] vectorises all of it. Without
+    /// `FUSED` it is the portable sweep; with it, the rows that can take it emit their springs
+    /// and sum the forces two rows behind in one AVX2 pass (`fused`), so `FUSED` must only be
+    /// set in a build for AVX2 ([`Stencil::sweep_avx2`]).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    pub(crate) fn sweep_portable(
-        &self,
-        scratch: &mut RowScratch,
-        params: &SweepParams,
-        positions: &[Vec3],
-        pinned: &[bool],
-        next: &mut [Vec3],
-        r0: usize,
-        r1: usize,
-    ) {
-        self.sweep_rows::<false>(scratch, params, positions, pinned, next, r0, r1);
-    }
-
-    /// The sweep's row loop. With `FUSED`, the rows that can take it emit their springs and sum
-    /// the forces two rows behind in one AVX2 pass (`fused`); `FUSED` must only be set in a
-    /// build for AVX2 ([`Stencil::sweep_avx2`]).
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn sweep_rows<const FUSED: bool>(
+    pub(crate) fn sweep_rows<const FUSED: bool>(
         &self,
         scratch: &mut RowScratch,
         params: &SweepParams,
@@ -499,7 +484,7 @@ mod tests {
             rows.end,
         );
         let mut portable = last[band.clone()].to_vec();
-        stencil.sweep_portable(
+        stencil.sweep_rows::<false>(
             &mut RowScratch::default(),
             &params,
             &positions,
