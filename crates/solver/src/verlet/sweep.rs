@@ -221,9 +221,9 @@ impl Stencil {
 
     /// The sweep itself, for whatever instruction set the caller was compiled for: everything
     /// it calls is inlined into it, so [`Stencil::sweep_avx2`] vectorises all of it. Without
-    /// `FUSED` it is the portable sweep; with it, the rows that can take it emit their springs
-    /// and sum the forces two rows behind in one AVX2 pass (`fused`), so `FUSED` must only be
-    /// set in a build for AVX2 ([`Stencil::sweep_avx2`]).
+    /// `FUSED` it is the portable sweep; with it, the rows that can take it emit their springs,
+    /// and sum and integrate two rows behind, in one AVX2 pass (`fused`), so `FUSED` must only
+    /// be set in a build for AVX2 ([`Stencil::sweep_avx2`]).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(crate) fn sweep_rows<const FUSED: bool>(
@@ -259,30 +259,27 @@ impl Stencil {
             let fuse = FUSED && y >= r0 + 2 && self.fusable(params, y);
             if y < nh {
                 self.load_row(scratch, positions, y);
-                if fuse {
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: `FUSED` is set only by `sweep_avx2`, which runs on AVX2 CPUs.
-                    #[allow(unsafe_code)]
-                    unsafe {
-                        self.emit_and_sum_avx2(scratch, params, y);
-                    }
-                } else {
+                if !fuse {
                     self.emit_row(scratch, params, y);
                 }
             }
             if y >= r0 + 2 {
                 let r = y - 2;
-                if !fuse {
+                let row = &mut next[(r - r0) * nw..(r - r0 + 1) * nw];
+                let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
+                // Columns already integrated by the fused pass.
+                let mut done = 0;
+                if fuse {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: `FUSED` is set only by `sweep_avx2`, which runs on AVX2 CPUs.
+                    #[allow(unsafe_code)]
+                    unsafe {
+                        done = self.emit_sum_integrate_avx2(scratch, params, y, positions, row);
+                    }
+                } else {
                     self.sum_row(scratch, params, r);
                 }
-                let row = &mut next[(r - r0) * nw..(r - r0 + 1) * nw];
-                integrate_row(
-                    &scratch.total,
-                    params,
-                    &positions[r * nw..(r + 1) * nw],
-                    &pinned[r * nw..(r + 1) * nw],
-                    row,
-                );
+                integrate_row(&scratch.total, params, positions, pinned, row, done);
             }
         }
     }
@@ -408,7 +405,8 @@ fn spring_forces(k: f64, a: [&[f64]; 3], b: [&[f64]; 3], rest: &[f64], f: [&mut 
 }
 
 /// Damped Verlet for one row: `x' = x + keep (x - x_last) + F dt^2 / m`, written over the last
-/// positions in `next`; pinned points keep their position.
+/// positions in `next`; pinned points keep their position. Columns before `from` are skipped,
+/// except that pinned ones are set again (the fused pass integrates them like any other).
 #[inline(always)]
 fn integrate_row(
     total: &[f64],
@@ -416,13 +414,25 @@ fn integrate_row(
     positions: &[Vec3],
     pinned: &[bool],
     next: &mut [Vec3],
+    from: usize,
 ) {
     let nw = positions.len();
     let (fx, fy, fz) = (&total[..nw], &total[nw..2 * nw], &total[2 * nw..3 * nw]);
-    for (x, ((p, l), &pin)) in positions
+    let done = from.min(nw);
+    for ((p, l), &pin) in positions[..done]
         .iter()
-        .zip(next.iter_mut())
-        .zip(pinned)
+        .zip(&mut next[..done])
+        .zip(&pinned[..done])
+    {
+        if pin {
+            *l = *p;
+        }
+    }
+    let (fx, fy, fz) = (&fx[done..], &fy[done..], &fz[done..]);
+    for (x, ((p, l), &pin)) in positions[done..]
+        .iter()
+        .zip(&mut next[done..nw])
+        .zip(&pinned[done..])
         .enumerate()
     {
         let f = Vec3::new(fx[x], fy[x], fz[x]);

@@ -1,31 +1,38 @@
-//! One AVX2 pass per row that emits row `y`'s springs and sums row `y - 2`'s forces.
+//! One AVX2 pass per row that emits row `y`'s springs, sums row `y - 2`'s forces and moves
+//! row `y - 2`'s points.
 //!
 //! # Why
 //!
 //! The spring loops are bound by the divider: a square root and a division per spring, which
 //! this CPU's one divider takes about 14 cycles to do for four lanes. The rest of the force
-//! sweep (thirteen terms summed per point) is adds, loads and stores that could run on the
-//! other execution units meanwhile, but only from the same loop: in loops of their own they
-//! ran after the divider work, not beside it. This pass puts a row's springs and the sums two
-//! rows behind into one loop over four columns at a time, so the sums fill the divider's
-//! shadow, and the six spring directions share one loop instead of six short ones.
+//! sweep (thirteen terms summed per point, then the Verlet update) is adds, loads, stores and
+//! shuffles that could run on the other execution units meanwhile, but only from the same loop:
+//! in loops of their own they ran after the divider work, not beside it. This pass puts a row's
+//! springs, and the sums and Verlet update two rows behind, into one loop over four columns at a
+//! time, so that work fills the divider's shadow; the six spring directions share the loop
+//! instead of running six short ones.
 //!
 //! # Same bits
 //!
-//! Each lane does the operations of `spring_forces` and of the sum in [`Stencil::sum_row`], in
-//! the same order, with the same IEEE double operations (no fused multiply-add, no
-//! reassociation). A lane whose spring does not exist (an edge column) writes `+0.0`, which is
-//! what the portable loops leave there. The last group of a row that is not a multiple of four
-//! wide overlaps the one before it: recomputing a column writes the very same bits.
+//! Each lane does the operations of `spring_forces`, of the sum in [`Stencil::sum_row`] and of
+//! `integrate_row`, in the same order, with the same IEEE double operations (no fused
+//! multiply-add, no reassociation). A lane whose spring does not exist (an edge column) writes
+//! `+0.0`, which is what the portable loops leave there. The last group of a row that is not a
+//! multiple of four wide overlaps the one before it: recomputing a column's forces and sums
+//! writes the very same bits, and its Verlet update is left to `integrate_row`, as is putting
+//! pinned points back.
 
 #![allow(unsafe_code)]
 
 use std::arch::x86_64::{
     __m256i, _CMP_EQ_OQ, _mm256_add_epi64, _mm256_add_pd, _mm256_and_pd, _mm256_and_si256,
-    _mm256_andnot_pd, _mm256_castsi256_pd, _mm256_cmp_pd, _mm256_cmpgt_epi64, _mm256_div_pd,
-    _mm256_loadu_pd, _mm256_mul_pd, _mm256_set_epi64x, _mm256_set1_epi64x, _mm256_set1_pd,
-    _mm256_setzero_pd, _mm256_sqrt_pd, _mm256_storeu_pd, _mm256_sub_pd,
+    _mm256_andnot_pd, _mm256_blend_pd, _mm256_castsi256_pd, _mm256_cmp_pd, _mm256_cmpgt_epi64,
+    _mm256_div_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_permute2f128_pd, _mm256_set_epi64x,
+    _mm256_set1_epi64x, _mm256_set1_pd, _mm256_setzero_pd, _mm256_sqrt_pd, _mm256_storeu_pd,
+    _mm256_sub_pd, _mm256_unpackhi_pd, _mm256_unpacklo_pd,
 };
+
+use cloth_mesh::Vec3;
 
 use super::{DIRECTIONS, PAD, RowScratch, Stencil, SweepParams, valid_columns};
 
@@ -43,16 +50,22 @@ impl Stencil {
         y >= 2 && y < self.nh && self.nw >= 4 && params.k.iter().all(|&k| k != 0.0)
     }
 
-    /// The springs of row `y` into the force ring and the summed force of row `y - 2` into
-    /// `scratch.total`: what [`Stencil::emit_row`] then [`Stencil::sum_row`] would write, bit
-    /// for bit. Row `y`'s positions must be in the ring; `y` must be [`Stencil::fusable`].
+    /// The springs of row `y` into the force ring, the summed force of row `r = y - 2` into
+    /// `scratch.total`, and the new positions of row `r` into `next` (row `r` of the last
+    /// positions, overwritten): what [`Stencil::emit_row`], [`Stencil::sum_row`] and
+    /// `integrate_row` would write, bit for bit, except that pinned points are integrated like
+    /// the others and the columns from the returned one on are not integrated (the caller
+    /// finishes both). `positions` is row `r` of the positions; row `y`'s must be in the ring;
+    /// `y` must be [`Stencil::fusable`].
     #[target_feature(enable = "avx2")]
-    pub(super) fn emit_and_sum_avx2(
+    pub(super) fn emit_sum_integrate_avx2(
         &self,
         scratch: &mut RowScratch,
         params: &SweepParams,
         y: usize,
-    ) {
+        positions: &[Vec3],
+        next: &mut [Vec3],
+    ) -> usize {
         let (nw, stride) = (self.nw, self.nw + 2 * PAD);
         // Every stream below is a checked slice of exactly `nw` values; the loop reads and
         // writes lanes `j..j + 4` of them with `j + 4 <= nw`.
@@ -118,6 +131,18 @@ impl Stencil {
         // `out` and `total` are filled: `own` holds 18 rows and `scratch.total` three.
         debug_assert!(out.iter().chain(&total).all(|p| !p.is_null()));
 
+        // The rows of points as flat `x, y, z` streams of `3 nw` values.
+        const { assert!(size_of::<Vec3>() == 3 * size_of::<f64>()) };
+        let (pos_row, next_row) = (&positions[..nw], &mut next[..nw]);
+        // SAFETY: a `Vec3` is nalgebra's `repr(C)` matrix over a `repr(transparent)` array
+        // storage, `[[f64; 3]; 1]`: three contiguous f64s with no padding (size checked
+        // above), so `nw` of them are `3 nw` f64s.
+        let p_flat: &[f64] = unsafe { std::slice::from_raw_parts(pos_row.as_ptr().cast(), 3 * nw) };
+        // SAFETY: as above, and `next_row`'s exclusive borrow is handed over for the view's life.
+        let l_flat: &mut [f64] =
+            unsafe { std::slice::from_raw_parts_mut(next_row.as_mut_ptr().cast(), 3 * nw) };
+        let keep = _mm256_set1_pd(params.keep);
+        let scale = _mm256_set1_pd(params.scale);
         let k = params.k.map(|k| _mm256_set1_pd(k));
         let weight = [0, 1, 2].map(|c| _mm256_set1_pd(params.weight[c]));
         let zero = _mm256_setzero_pd();
@@ -125,6 +150,9 @@ impl Stencil {
         let mut i = 0;
         while i < nw {
             let j = i.min(nw - 4);
+            // The overlapping last group (`j < i`) recomputes forces and sums, but must not
+            // integrate its columns again: integration reads what it overwrites.
+            let integrate = j == i;
             i += 4;
             let column = _mm256_add_epi64(_mm256_set1_epi64x(j as i64), lane);
             // SAFETY (every load and store below): each pointer is the start of a stream of
@@ -167,6 +195,7 @@ impl Stencil {
                 }
                 // Row r's sum in the course's order: its own six springs, then the ones it is
                 // the far end of; `last` holds row y's direction-5 forces, the final term.
+                let mut sums = [zero; 3];
                 for c in 0..3 {
                     let mut sum = weight[c];
                     for term in terms[c] {
@@ -177,8 +206,34 @@ impl Stencil {
                     }
                     sum = _mm256_sub_pd(sum, last[c]);
                     _mm256_storeu_pd(total[c].add(j), sum);
+                    sums[c] = sum;
+                }
+                if integrate {
+                    // The four points' forces interleaved as they lie in memory, `x y z x | y z
+                    // x y | z x y z`, then Verlet on three vectors of four values each.
+                    let [fx, fy, fz] = sums;
+                    let xy_even = _mm256_unpacklo_pd(fx, fy);
+                    let xy_odd = _mm256_unpackhi_pd(fx, fy);
+                    let zx = _mm256_unpacklo_pd(fz, xy_odd);
+                    let yz = _mm256_unpackhi_pd(xy_odd, fz);
+                    let f = [
+                        _mm256_permute2f128_pd::<0x20>(xy_even, zx),
+                        _mm256_blend_pd::<0b1100>(yz, xy_even),
+                        _mm256_permute2f128_pd::<0x31>(zx, yz),
+                    ];
+                    for (q, f) in f.into_iter().enumerate() {
+                        let at = 3 * j + 4 * q;
+                        let p = _mm256_loadu_pd(p_flat[at..at + 4].as_ptr());
+                        let l = &mut l_flat[at..at + 4];
+                        let moved =
+                            _mm256_mul_pd(_mm256_sub_pd(p, _mm256_loadu_pd(l.as_ptr())), keep);
+                        let new = _mm256_add_pd(_mm256_add_pd(p, moved), _mm256_mul_pd(f, scale));
+                        _mm256_storeu_pd(l.as_mut_ptr(), new);
+                    }
                 }
             }
         }
+        // Integrated: every group but an overlapping last one.
+        nw / 4 * 4
     }
 }
