@@ -450,8 +450,9 @@ mod tests {
     use crate::pinned_grid;
     use crate::testing::assert_same_bits;
 
-    /// Sweeps rows `rows` of a `nw` x `nh` cloth, jittered by `seed`, with the dispatched
-    /// (AVX2 and fused, on such CPUs) and the portable sweep, and asserts the same bits.
+    /// Sweeps rows `rows` of a `nw` x `nh` cloth, its points and their last positions jittered
+    /// at random, with the dispatched (AVX2 and fused, on such CPUs) and the portable sweep,
+    /// and asserts the same bits.
     fn assert_dispatch_matches_portable(nw: usize, nh: usize, rows: std::ops::Range<usize>) {
         let mesh = ClothMesh::new(&GridSpec {
             width: nw as f64 / 49.0,

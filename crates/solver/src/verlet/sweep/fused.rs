@@ -128,8 +128,9 @@ impl Stencil {
         for (total, row) in total.iter_mut().zip(scratch.total.chunks_exact_mut(nw)) {
             *total = row[..nw].as_mut_ptr();
         }
-        // `out` and `total` are filled: `own` holds 18 rows and `scratch.total` three.
-        debug_assert!(out.iter().chain(&total).all(|p| !p.is_null()));
+        // `own` holds 18 rows and `scratch.total` three, so every pointer is set; checked, as
+        // the loop's SAFETY rests on it (once a row, next to 4 * 18 stores a column group).
+        assert!(out.iter().chain(&total).all(|p| !p.is_null()));
 
         // The rows of points as flat `x, y, z` streams of `3 nw` values.
         const { assert!(size_of::<Vec3>() == 3 * size_of::<f64>()) };
