@@ -268,19 +268,52 @@ impl Stencil {
                 let row = &mut next[(r - r0) * nw..(r - r0 + 1) * nw];
                 let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
                 // Columns already integrated by the fused pass.
-                let mut done = 0;
-                if fuse {
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: `FUSED` is set only by `sweep_avx2`, which runs on AVX2 CPUs.
-                    #[allow(unsafe_code)]
-                    unsafe {
-                        done = self.emit_sum_integrate_avx2(scratch, params, y, positions, row);
-                    }
+                let done = if fuse {
+                    self.fused(scratch, params, y, positions, row)
                 } else {
                     self.sum_row(scratch, params, r);
-                }
+                    0
+                };
                 integrate_row(&scratch.total, params, positions, pinned, row, done);
             }
+        }
+    }
+
+    /// Whether row `y` can take the fused pass: every spring type enabled (a disabled one is a
+    /// row of zeros, which the portable loop writes), every partner row present, a row at
+    /// least one four-lane group wide, and an x86-64 build (the pass is AVX2 code).
+    #[inline(always)]
+    fn fusable(&self, params: &SweepParams, y: usize) -> bool {
+        cfg!(target_arch = "x86_64")
+            && y >= 2
+            && y < self.nh
+            && self.nw >= 4
+            && params.k.iter().all(|&k| k != 0.0)
+    }
+
+    /// The fused pass for row `y` ([`Stencil::fusable`]); returns the columns it integrated.
+    /// Only called from the sweep with `FUSED` set, so only in the AVX2 build.
+    #[inline(always)]
+    fn fused(
+        &self,
+        scratch: &mut RowScratch,
+        params: &SweepParams,
+        y: usize,
+        positions: &[Vec3],
+        next: &mut [Vec3],
+    ) -> usize {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `FUSED` is set only by `sweep_avx2`, which runs on AVX2 CPUs.
+        #[allow(unsafe_code)]
+        unsafe {
+            self.emit_sum_integrate_avx2(scratch, params, y, positions, next)
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            // Unreachable: `fusable` is false off x86-64. Summing here keeps the sweep right.
+            let _ = (positions, next);
+            self.sum_row(scratch, params, y - 2);
+            0
         }
     }
 

@@ -43,13 +43,6 @@ fn stream(s: &[f64], start: usize, shift: isize, len: usize) -> &[f64] {
 }
 
 impl Stencil {
-    /// Whether row `y` can take the fused pass: every spring type enabled (a disabled one is a
-    /// row of zeros, which the portable loop writes), every partner row present, and a row at
-    /// least one four-lane group wide.
-    pub(super) fn fusable(&self, params: &SweepParams, y: usize) -> bool {
-        y >= 2 && y < self.nh && self.nw >= 4 && params.k.iter().all(|&k| k != 0.0)
-    }
-
     /// The springs of row `y` into the force ring, the summed force of row `r = y - 2` into
     /// `scratch.total`, and the new positions of row `r` into `next` (row `r` of the last
     /// positions, overwritten): what [`Stencil::emit_row`], [`Stencil::sum_row`] and
