@@ -106,15 +106,79 @@ pub fn time_frames(
         frame_start = now;
     }
     let seconds = start.elapsed().as_secs_f64();
-    Ok(BenchResult {
+    Ok(result(mesh, params, seconds, &mut frame_seconds))
+}
+
+/// The outcome of `frame_seconds.len()` frames that took `seconds` in all.
+fn result(
+    mesh: &ClothMesh,
+    params: &StepParams,
+    seconds: f64,
+    frame_seconds: &mut [f64],
+) -> BenchResult {
+    BenchResult {
         points: mesh.len(),
         springs: mesh.springs().len(),
-        frames: run.frames,
+        frames: frame_seconds.len() as u32,
         steps_per_frame: params.steps_per_frame,
         seconds,
-        median_frame_seconds: median(&mut frame_seconds).unwrap_or(0.0),
+        median_frame_seconds: median(frame_seconds).unwrap_or(0.0),
         frame_time: 1.0 / params.frames_per_sec,
-    })
+    }
+}
+
+/// One run of [`time_interleaved`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InterleavedResult {
+    /// Its frames, timed as [`time_frames`] times them.
+    pub result: BenchResult,
+    /// The median over rounds of this run's frame time over the first run's frame time in the
+    /// same round (1 for the first run): a speed ratio that the machine's drift, which moves
+    /// both frames of a round alike, hardly touches.
+    pub time_ratio_to_first: f64,
+}
+
+/// Like [`time_frames`] for several runs on one mesh, each a solver advancing its own state,
+/// but with their frames taken in turn: every run warms up, then each round times one frame
+/// of every run. On a shared machine whose speed drifts by tens of percent within a minute
+/// (as cloud machines' do), runs timed one after the other compare moments as much as code;
+/// runs timed in turn see the same moments.
+///
+/// # Errors
+/// The index of the run and the first [`SolveError`] of any of its frames.
+pub fn time_interleaved(
+    runs: &mut [(&mut dyn Solver, &mut ClothState)],
+    mesh: &ClothMesh,
+    colliders: &[Collider],
+    params: &StepParams,
+    run: BenchRun,
+) -> Result<Vec<InterleavedResult>, (usize, SolveError)> {
+    for (i, (solver, state)) in runs.iter_mut().enumerate() {
+        for _ in 0..run.warmup_frames {
+            advance_frame(&mut **solver, mesh, colliders, params, state).map_err(|e| (i, e))?;
+        }
+    }
+    let frames = run.frames as usize;
+    let mut frame_seconds = vec![Vec::with_capacity(frames); runs.len()];
+    for _ in 0..frames {
+        for (i, (solver, state)) in runs.iter_mut().enumerate() {
+            let start = Instant::now();
+            advance_frame(&mut **solver, mesh, colliders, params, state).map_err(|e| (i, e))?;
+            frame_seconds[i].push(start.elapsed().as_secs_f64());
+        }
+    }
+    let first = frame_seconds.first().cloned().unwrap_or_default();
+    Ok(frame_seconds
+        .iter_mut()
+        .map(|seconds| {
+            let mut ratios: Vec<f64> = seconds.iter().zip(&first).map(|(t, t0)| t / t0).collect();
+            let total = seconds.iter().sum();
+            InterleavedResult {
+                result: result(mesh, params, total, seconds),
+                time_ratio_to_first: median(&mut ratios).unwrap_or(1.0),
+            }
+        })
+        .collect())
 }
 
 /// The median of `values` (the mean of the middle two for an even count); `None` when empty.
@@ -185,6 +249,61 @@ mod tests {
         assert!((r.median_ms_per_frame() - 0.8).abs() < 1e-12);
         assert!((r.particle_steps_per_sec() - 93.75e6).abs() < 1e-3);
         assert!((r.realtime_factor() - 1.0 / 90.0 / 0.0008).abs() < 1e-9);
+    }
+
+    #[test]
+    fn interleaved_runs_advance_as_runs_timed_alone() {
+        // Taking frames in turn must not change what each run computes: every state ends as a
+        // run of its own with the same frames would leave it, bit for bit. The second run is a
+        // different solver, so the runs really are independent.
+        let mesh = pinned_grid(10).unwrap();
+        let params = StepParams::default();
+        let run = BenchRun {
+            warmup_frames: 2,
+            frames: 3,
+        };
+        let mut alone = [ClothState::new(&mesh), ClothState::new(&mesh)];
+        let mut verlet = crate::Verlet::new();
+        let mut parallel = crate::Verlet::new().with_order(crate::ConstraintOrder::Parallel);
+        time_frames(&mut verlet, &mesh, &[], &params, &mut alone[0], run).unwrap();
+        time_frames(&mut parallel, &mesh, &[], &params, &mut alone[1], run).unwrap();
+
+        let (mut a, mut b) = (ClothState::new(&mesh), ClothState::new(&mesh));
+        let mut verlet = crate::Verlet::new();
+        let mut parallel = crate::Verlet::new().with_order(crate::ConstraintOrder::Parallel);
+        let mut runs: Vec<(&mut dyn Solver, &mut ClothState)> =
+            vec![(&mut verlet, &mut a), (&mut parallel, &mut b)];
+        let timed = time_interleaved(&mut runs, &mesh, &[], &params, run).unwrap();
+        assert_eq!(a.positions, alone[0].positions);
+        assert_eq!(b.positions, alone[1].positions);
+        assert_eq!(timed.len(), 2);
+        for t in &timed {
+            assert_eq!(t.result.frames, 3);
+            assert_eq!(t.result.points, 100);
+            assert!(t.result.median_frame_seconds > 0.0 && t.result.seconds > 0.0);
+            assert!(t.time_ratio_to_first.is_finite() && t.time_ratio_to_first > 0.0);
+        }
+        // Each round's ratio of the first run to itself is exactly 1.
+        assert_eq!(timed[0].time_ratio_to_first, 1.0);
+    }
+
+    #[test]
+    fn an_interleaved_run_that_fails_is_named_by_its_index() {
+        let mesh = pinned_grid(6).unwrap();
+        let params = StepParams::default();
+        let mut good = crate::Verlet::new();
+        let mut bad = crate::Verlet::new();
+        let (mut a, mut b) = (ClothState::new(&mesh), ClothState::new(&mesh));
+        // A non-finite position makes the second run's first step fail.
+        b.positions[7].x = f64::NAN;
+        let mut runs: Vec<(&mut dyn Solver, &mut ClothState)> =
+            vec![(&mut good, &mut a), (&mut bad, &mut b)];
+        let run = BenchRun {
+            warmup_frames: 1,
+            frames: 1,
+        };
+        let (index, _) = time_interleaved(&mut runs, &mesh, &[], &params, run).unwrap_err();
+        assert_eq!(index, 1);
     }
 
     #[test]

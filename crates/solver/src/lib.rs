@@ -22,7 +22,9 @@ mod verlet;
 #[cfg(test)]
 mod testing;
 
-pub use bench::{BenchResult, BenchRun, pinned_grid, time_frames};
+pub use bench::{
+    BenchResult, BenchRun, InterleavedResult, pinned_grid, time_frames, time_interleaved,
+};
 pub use cloth_mesh::{ClothMesh, ClothState, Vec3};
 pub use collider::{Collider, Plane, Sphere, apply_colliders};
 pub use diagnostics::{kinetic_energy, max_stretch_ratio};

@@ -15,7 +15,8 @@ use anyhow::Context as _;
 use clap::ValueEnum;
 use cloth_mesh::ClothState;
 use cloth_solver::{
-    BenchRun, ConstraintOrder, Solver, SolverKind, StepParams, Verlet, pinned_grid, time_frames,
+    BenchResult, BenchRun, ConstraintOrder, Solver, SolverKind, StepParams, Verlet, pinned_grid,
+    time_frames, time_interleaved,
 };
 
 /// `clothsim bench` options.
@@ -27,18 +28,23 @@ pub struct Args {
     /// Solver to time (repeatable): verlet, implicit, fast-implicit.
     #[arg(long = "solver", default_values_t = [SolverKind::Verlet])]
     solvers: Vec<SolverKind>,
-    /// Worker threads for the Verlet solver.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=256))]
-    threads: u16,
+    /// Worker threads for the Verlet solver (repeatable), e.g. `--threads 1 --threads 2`.
+    #[arg(long = "threads", default_values_t = [1], value_parser = clap::value_parser!(u16).range(1..=256))]
+    threads: Vec<u16>,
     /// Self-collision on or off.
     #[arg(long = "self-collision", value_enum, default_value_t = Switch::On)]
     self_collision: Switch,
-    /// Constraint order of the Verlet solver: faithful (the course's) or parallel.
-    #[arg(long, value_enum, default_value_t = Order::Faithful)]
-    order: Order,
+    /// Constraint order of the Verlet solver (repeatable): faithful (the course's) or parallel.
+    #[arg(long = "order", value_enum, default_values_t = [Order::Faithful])]
+    orders: Vec<Order>,
     /// Frames timed per configuration (after one simulated second of warm-up).
     #[arg(long, default_value_t = 90, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     frames: u32,
+    /// Time the configurations of each grid in turn, one frame of each per round, and add
+    /// each one's time ratio to the grid's first configuration (the median over rounds): the
+    /// way to compare on a machine whose speed drifts.
+    #[arg(long)]
+    interleave: bool,
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
@@ -56,19 +62,132 @@ enum Order {
     Parallel,
 }
 
-/// Builds the solver to time; Verlet takes the thread count and order.
-fn build(kind: SolverKind, args: &Args) -> anyhow::Result<Box<dyn Solver>> {
-    if kind == SolverKind::Verlet {
-        let order = match args.order {
+impl Order {
+    fn name(self) -> &'static str {
+        match self {
+            Order::Faithful => "faithful",
+            Order::Parallel => "parallel",
+        }
+    }
+}
+
+/// One configuration to time: the threads and order apply to the Verlet solver only.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Config {
+    kind: SolverKind,
+    threads: u16,
+    order: Option<Order>,
+}
+
+impl Config {
+    /// Every configuration the options name, in the order given: solvers, then threads, then
+    /// orders (the other solvers have neither).
+    fn all(args: &Args) -> Vec<Self> {
+        let mut out = Vec::new();
+        for &kind in &args.solvers {
+            if kind != SolverKind::Verlet {
+                out.push(Config {
+                    kind,
+                    threads: 1,
+                    order: None,
+                });
+                continue;
+            }
+            for &threads in &args.threads {
+                for &order in &args.orders {
+                    out.push(Config {
+                        kind,
+                        threads,
+                        order: Some(order),
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    /// The solver to time.
+    fn build(self) -> anyhow::Result<Box<dyn Solver>> {
+        let Some(order) = self.order else {
+            return crate::solvers::build(self.kind);
+        };
+        let order = match order {
             Order::Faithful => ConstraintOrder::Faithful,
             Order::Parallel => ConstraintOrder::Parallel,
         };
         let verlet = Verlet::new()
-            .with_threads(usize::from(args.threads))?
+            .with_threads(usize::from(self.threads))?
             .with_order(order);
-        return Ok(Box::new(verlet));
+        Ok(Box::new(verlet))
     }
-    crate::solvers::build(kind)
+
+    /// How the configuration is named in errors.
+    fn describe(self, n: usize) -> String {
+        match self.order {
+            Some(order) => format!(
+                "{} ({} threads, {} order) on the {n} x {n} cloth",
+                self.kind,
+                self.threads,
+                order.name()
+            ),
+            None => format!("{} on the {n} x {n} cloth", self.kind),
+        }
+    }
+}
+
+/// One row of the output.
+struct Row {
+    n: usize,
+    config: Config,
+    result: BenchResult,
+    /// With `--interleave`: the time ratio to the grid's first configuration.
+    ratio: Option<f64>,
+}
+
+/// Times every configuration of the `n x n` cloth, one after the other or in turn.
+fn time_grid(args: &Args, params: &StepParams, n: usize) -> anyhow::Result<Vec<Row>> {
+    let mesh = pinned_grid(n).with_context(|| format!("--grid {n}"))?;
+    let run = BenchRun {
+        warmup_frames: 90,
+        frames: args.frames,
+    };
+    let configs = Config::all(args);
+    let mut solvers = configs
+        .iter()
+        .map(|c| c.build().with_context(|| c.describe(n)))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let mut states: Vec<ClothState> = configs.iter().map(|_| ClothState::new(&mesh)).collect();
+    if !args.interleave {
+        let mut rows = Vec::new();
+        for ((config, solver), state) in configs.iter().zip(&mut solvers).zip(&mut states) {
+            let result = time_frames(solver.as_mut(), &mesh, &[], params, state, run)
+                .with_context(|| config.describe(n))?;
+            rows.push(Row {
+                n,
+                config: *config,
+                result,
+                ratio: None,
+            });
+        }
+        return Ok(rows);
+    }
+    let mut runs: Vec<(&mut dyn Solver, &mut ClothState)> = solvers
+        .iter_mut()
+        .map(|s| &mut **s as &mut dyn Solver)
+        .zip(states.iter_mut())
+        .collect();
+    let timed = time_interleaved(&mut runs, &mesh, &[], params, run)
+        .map_err(|(i, e)| anyhow::Error::new(e).context(configs[i].describe(n)))?;
+    Ok(configs
+        .iter()
+        .zip(timed)
+        .map(|(config, t)| Row {
+            n,
+            config: *config,
+            result: t.result,
+            ratio: Some(t.time_ratio_to_first),
+        })
+        .collect())
 }
 
 /// Runs every configuration and prints the table (or JSON).
@@ -82,59 +201,79 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     };
     let mut rows = Vec::new();
     for &n in &args.grids {
-        let mesh = pinned_grid(n).with_context(|| format!("--grid {n}"))?;
-        for &kind in &args.solvers {
-            let mut solver = build(kind, args)?;
-            let mut state = ClothState::new(&mesh);
-            let run = BenchRun {
-                warmup_frames: 90,
-                frames: args.frames,
-            };
-            let r = time_frames(solver.as_mut(), &mesh, &[], &params, &mut state, run)
-                .with_context(|| format!("{kind} on the {n} x {n} cloth"))?;
-            rows.push((n, kind, r));
-        }
+        rows.extend(time_grid(args, &params, n)?);
     }
     let mut out = String::new();
     if args.json {
         let list: Vec<_> = rows
             .iter()
-            .map(|(n, kind, r)| {
-                serde_json::json!({
-                    "grid": n,
-                    "solver": kind.name(),
-                    "threads": args.threads,
-                    "self_collision": params.self_collision,
-                    "order": format!("{:?}", args.order).to_lowercase(),
-                    "points": r.points,
-                    "springs": r.springs,
-                    "frames": r.frames,
-                    "ms_per_frame_median": r.median_ms_per_frame(),
-                    "ms_per_frame_mean": r.ms_per_frame(),
-                    "particle_steps_per_sec": r.particle_steps_per_sec(),
-                    "realtime_factor": r.realtime_factor(),
-                })
-            })
+            .map(
+                |Row {
+                     n,
+                     config,
+                     result: r,
+                     ratio,
+                 }| {
+                    serde_json::json!({
+                        "grid": n,
+                        "solver": config.kind.name(),
+                        "threads": config.threads,
+                        "self_collision": params.self_collision,
+                        "order": config.order.map(Order::name),
+                        "points": r.points,
+                        "springs": r.springs,
+                        "frames": r.frames,
+                        "ms_per_frame_median": r.median_ms_per_frame(),
+                        "ms_per_frame_mean": r.ms_per_frame(),
+                        "particle_steps_per_sec": r.particle_steps_per_sec(),
+                        "realtime_factor": r.realtime_factor(),
+                        "time_ratio_to_first": ratio,
+                    })
+                },
+            )
             .collect();
         out = serde_json::to_string_pretty(&list)?;
     } else {
-        let _ = writeln!(
+        // NOTE: new columns go on the right, so scripts reading the first ones keep working.
+        let _ = write!(
             out,
-            "{:>7} {:>14} {:>8} {:>10} {:>10} {:>18} {:>10}",
-            "grid", "solver", "threads", "median ms", "mean ms", "particle-steps/s", "real-time"
+            "{:>7} {:>14} {:>8} {:>10} {:>10} {:>18} {:>10} {:>9}",
+            "grid",
+            "solver",
+            "threads",
+            "median ms",
+            "mean ms",
+            "particle-steps/s",
+            "real-time",
+            "order"
         );
-        for (n, kind, r) in &rows {
-            let _ = writeln!(
+        if args.interleave {
+            let _ = write!(out, " {:>9}", "vs first");
+        }
+        out.push('\n');
+        for Row {
+            n,
+            config,
+            result: r,
+            ratio,
+        } in &rows
+        {
+            let _ = write!(
                 out,
-                "{:>7} {:>14} {:>8} {:>10.3} {:>10.3} {:>16.2}M {:>9.2}x",
+                "{:>7} {:>14} {:>8} {:>10.3} {:>10.3} {:>16.2}M {:>9.2}x {:>9}",
                 format!("{n}x{n}"),
-                kind.name(),
-                args.threads,
+                config.kind.name(),
+                config.threads,
                 r.median_ms_per_frame(),
                 r.ms_per_frame(),
                 r.particle_steps_per_sec() / 1e6,
-                r.realtime_factor()
+                r.realtime_factor(),
+                config.order.map_or("-", Order::name),
             );
+            if let Some(ratio) = ratio {
+                let _ = write!(out, " {ratio:>8.3}x");
+            }
+            out.push('\n');
         }
     }
     println!("{}", out.trim_end());

@@ -296,6 +296,72 @@ fn bench_reports_each_configuration_with_consistent_figures() {
 }
 
 #[test]
+fn bench_interleaves_every_configuration_and_reports_ratios_to_the_first() {
+    // Two thread counts by two orders of the Verlet solver, plus the implicit solver (which
+    // has neither): five configurations, named in the order given, each with its ratio.
+    let o = clothsim(&[
+        "bench",
+        "--grid",
+        "8",
+        "--frames",
+        "3",
+        "--threads",
+        "1",
+        "--threads",
+        "2",
+        "--order",
+        "faithful",
+        "--order",
+        "parallel",
+        "--solver",
+        "verlet",
+        "--solver",
+        "implicit",
+        "--interleave",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rows = v.as_array().unwrap();
+    let named: Vec<_> = rows
+        .iter()
+        .map(|r| {
+            (
+                r["solver"].as_str().unwrap(),
+                r["threads"].as_u64().unwrap(),
+                r["order"].as_str(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        named,
+        [
+            ("verlet", 1, Some("faithful")),
+            ("verlet", 1, Some("parallel")),
+            ("verlet", 2, Some("faithful")),
+            ("verlet", 2, Some("parallel")),
+            ("implicit", 1, None),
+        ]
+    );
+    // The first configuration's frames over themselves: exactly 1 in every round.
+    assert_eq!(rows[0]["time_ratio_to_first"], 1.0);
+    for row in rows {
+        assert_eq!(row["frames"], 3);
+        let ratio = row["time_ratio_to_first"].as_f64().unwrap();
+        assert!(ratio.is_finite() && ratio > 0.0, "{row}");
+    }
+    // The table ends with the ratio column; without `--interleave` the JSON has no ratio.
+    let table = clothsim(&["bench", "--grid", "8", "--frames", "2", "--interleave"]);
+    assert!(table.status.success(), "{}", stderr(&table));
+    let text = String::from_utf8(table.stdout).unwrap();
+    assert!(text.lines().next().unwrap().ends_with("vs first"));
+    assert!(text.lines().nth(1).unwrap().ends_with("1.000x"));
+    let plain = clothsim(&["bench", "--grid", "8", "--frames", "2", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&plain.stdout).unwrap();
+    assert!(v[0]["time_ratio_to_first"].is_null());
+}
+
+#[test]
 fn bench_rejects_a_bad_grid_with_a_clear_message() {
     let o = clothsim(&["bench", "--grid", "1", "--frames", "1"]);
     assert!(!o.status.success());
