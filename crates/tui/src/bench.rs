@@ -6,8 +6,10 @@
 //!
 //! Each configuration is the course's `pinned4` cloth scaled to `--grid N` points per side at the
 //! standard spacing ([`cloth_solver::pinned_grid`]), warmed up for one simulated second, then
-//! timed by [`cloth_solver::time_frames`]. Criterion benches (`cargo bench -p cloth-solver`) are
-//! the measurement of record; this command lets a user reproduce the README's table.
+//! timed by [`cloth_solver::time_frames`], or with `--interleave` frame by frame in turn with
+//! the grid's other configurations by [`cloth_solver::time_interleaved`]. Criterion benches
+//! (`cargo bench -p cloth-solver`) are the measurement of record; this command lets a user
+//! reproduce the README's table.
 
 use std::fmt::Write as _;
 
@@ -42,7 +44,8 @@ pub struct Args {
     frames: u32,
     /// Time the configurations of each grid in turn, one frame of each per round, and add
     /// each one's time ratio to the grid's first configuration (the median over rounds): the
-    /// way to compare on a machine whose speed drifts.
+    /// way to compare solvers or orders on a machine whose speed drifts (thread counts on big
+    /// cloths are better compared in separate runs: an idle pool sleeps between its frames).
     #[arg(long)]
     interleave: bool,
     /// Print JSON instead of a table.
