@@ -155,15 +155,13 @@ fn time_grid(args: &Args, params: &StepParams, n: usize) -> anyhow::Result<Vec<R
         frames: args.frames,
     };
     let configs = Config::all(args);
-    let mut solvers = configs
-        .iter()
-        .map(|c| c.build().with_context(|| c.describe(n)))
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    let mut states: Vec<ClothState> = configs.iter().map(|_| ClothState::new(&mesh)).collect();
     if !args.interleave {
+        // One configuration alive at a time: each solver's memory is freed before the next.
         let mut rows = Vec::new();
-        for ((config, solver), state) in configs.iter().zip(&mut solvers).zip(&mut states) {
-            let result = time_frames(solver.as_mut(), &mesh, &[], params, state, run)
+        for config in &configs {
+            let mut solver = config.build().with_context(|| config.describe(n))?;
+            let mut state = ClothState::new(&mesh);
+            let result = time_frames(solver.as_mut(), &mesh, &[], params, &mut state, run)
                 .with_context(|| config.describe(n))?;
             rows.push(Row {
                 n,
@@ -174,6 +172,11 @@ fn time_grid(args: &Args, params: &StepParams, n: usize) -> anyhow::Result<Vec<R
         }
         return Ok(rows);
     }
+    let mut solvers = configs
+        .iter()
+        .map(|c| c.build().with_context(|| c.describe(n)))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let mut states: Vec<ClothState> = configs.iter().map(|_| ClothState::new(&mesh)).collect();
     let mut runs: Vec<(&mut dyn Solver, &mut ClothState)> = solvers
         .iter_mut()
         .map(|s| &mut **s as &mut dyn Solver)
