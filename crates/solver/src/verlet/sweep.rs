@@ -267,12 +267,19 @@ impl Stencil {
                 let r = y - 2;
                 let row = &mut next[(r - r0) * nw..(r - r0 + 1) * nw];
                 let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
-                // Columns already integrated by the fused pass.
-                let done = if fuse {
-                    self.fused(scratch, params, y, positions, row)
-                } else {
-                    self.sum_row(scratch, params, r);
-                    0
+                // Columns already integrated by the fused pass (`fuse` is never set off
+                // x86-64, see `fusable`).
+                let done = match () {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: `FUSED` is set only by `sweep_avx2`, which runs on AVX2 CPUs.
+                    #[allow(unsafe_code)]
+                    () if fuse => unsafe {
+                        self.emit_sum_integrate_avx2(scratch, params, y, positions, row)
+                    },
+                    () => {
+                        self.sum_row(scratch, params, r);
+                        0
+                    }
                 };
                 integrate_row(&scratch.total, params, positions, pinned, row, done);
             }
@@ -289,32 +296,6 @@ impl Stencil {
             && y < self.nh
             && self.nw >= 4
             && params.k.iter().all(|&k| k != 0.0)
-    }
-
-    /// The fused pass for row `y` ([`Stencil::fusable`]); returns the columns it integrated.
-    /// Only called from the sweep with `FUSED` set, so only in the AVX2 build.
-    #[inline(always)]
-    fn fused(
-        &self,
-        scratch: &mut RowScratch,
-        params: &SweepParams,
-        y: usize,
-        positions: &[Vec3],
-        next: &mut [Vec3],
-    ) -> usize {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: `FUSED` is set only by `sweep_avx2`, which runs on AVX2 CPUs.
-        #[allow(unsafe_code)]
-        unsafe {
-            self.emit_sum_integrate_avx2(scratch, params, y, positions, next)
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            // Unreachable: `fusable` is false off x86-64. Summing here keeps the sweep right.
-            let _ = (positions, next);
-            self.sum_row(scratch, params, y - 2);
-            0
-        }
     }
 
     /// Copies row `y` of `positions` into the struct-of-arrays ring.
