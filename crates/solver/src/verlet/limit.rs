@@ -290,6 +290,8 @@ fn exists_mask(nw: usize, x: usize, y: usize) -> u8 {
 mod tests {
     use super::*;
     use crate::testing::assert_same_bits;
+    use crate::self_collision::dist2;
+    use crate::stretch::StretchBands;
     use crate::{MAX_STRETCH, limit_stretch, pinned_grid};
 
     #[test]
@@ -320,6 +322,113 @@ mod tests {
         limit_stretch(mesh.springs(), mesh.pinned(), &mut course, MAX_STRETCH);
         sweep.limit(&stencil, mesh.pinned(), &mut fast);
         assert!(fast.iter().zip(&course).all(|(a, b)| a == b));
+    }
+
+    /// A cloth squeezed to 0.9 of its rest lengths (every spring inside the limit, so none is
+    /// marked by the pre-pass), with every fifth point pulled off by up to two spacings. Their
+    /// corrections move neighbours, whose corrections move theirs: a cascade through springs
+    /// that only the moved-point marks send the sweep to. Bending springs get over the limit
+    /// only when the cloth between their ends is too, so the cascade needs pulls this large to
+    /// reach them.
+    fn cascading_cloth(nw: usize, seed: u64) -> (cloth_mesh::ClothMesh, Vec<Vec3>) {
+        let mesh = pinned_grid(nw).unwrap();
+        let origin = mesh.start_positions()[0];
+        let far = 2.0 / (nw - 1) as f64;
+        let mut rng = cloth_mesh::SplitMix64::new(seed);
+        let positions = mesh
+            .start_positions()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let squeezed = origin + (p - origin) * 0.9;
+                if i % 5 == 0 {
+                    squeezed
+                        + Vec3::new(
+                            rng.uniform(-far, far),
+                            rng.uniform(-far, far),
+                            rng.uniform(-far, far),
+                        )
+                } else {
+                    squeezed
+                }
+            })
+            .collect();
+        (mesh, positions)
+    }
+
+    /// Per direction, the springs the course corrects in one sweep from `start` although they
+    /// were inside the limit at the start: those the sweep finds only through moved-point
+    /// marks.
+    fn cascaded(mesh: &cloth_mesh::ClothMesh, start: &[Vec3]) -> [usize; 6] {
+        let nw = mesh.nw() as isize;
+        let mut positions = start.to_vec();
+        let mut counts = [0; 6];
+        for s in mesh.springs() {
+            let (a, b) = (s.a as usize, s.b as usize);
+            let inside = dist2(&(start[b] - start[a])) <= inside_bound(MAX_STRETCH * s.rest);
+            let corrected = limit_one(a, b, s.rest, mesh.pinned(), &mut positions, MAX_STRETCH);
+            if inside && corrected {
+                let off = b as isize - a as isize;
+                let t = DIRECTIONS
+                    .iter()
+                    .position(|&(dx, dy, _)| dx + dy * nw == off)
+                    .unwrap();
+                counts[t] += 1;
+            }
+        }
+        counts
+    }
+
+    #[test]
+    fn corrections_cascade_through_unmarked_springs_as_in_the_course() {
+        let mut cascades = [0; 6];
+        for seed in 0..8 {
+            let (mesh, start) = cascading_cloth(17, seed);
+            let stencil = Stencil::new(&mesh).unwrap();
+            let mut course = start.clone();
+            limit_stretch(mesh.springs(), mesh.pinned(), &mut course, MAX_STRETCH);
+            let mut fast = start.clone();
+            StretchSweep::new(&stencil, MAX_STRETCH).limit(&stencil, mesh.pinned(), &mut fast);
+            assert_same_bits(&fast, &course);
+            for (all, this) in cascades.iter_mut().zip(cascaded(&mesh, &start)) {
+                *all += this;
+            }
+        }
+        // Every direction's marks were needed somewhere, or the test proves nothing of them.
+        assert!(cascades.iter().all(|&c| c > 0), "cascades: {cascades:?}");
+    }
+
+    #[test]
+    fn cascades_stay_the_courses_inside_each_band() {
+        // Bands of the parallel order: each is swept in the course's order over its own
+        // springs, the blocks and then the seams; a cascade reaching a band's first rows marks
+        // emitters of the band from points of the two rows before it.
+        let nw = 31;
+        for seed in 0..6 {
+            let (mesh, start) = cascading_cloth(nw, seed);
+            let stencil = Stencil::new(&mesh).unwrap();
+            let bands = StretchBands::new(&mesh);
+            assert!(bands.phases()[1].len() > 1, "the test must cut seams");
+            let mut course = start.clone();
+            for band in bands.phases().into_iter().flatten() {
+                let springs: Vec<_> = mesh
+                    .springs()
+                    .iter()
+                    .filter(|s| band.rows.contains(&(s.a as usize / nw)))
+                    .copied()
+                    .collect();
+                limit_stretch(&springs, mesh.pinned(), &mut course, MAX_STRETCH);
+            }
+            let mut fast = start.clone();
+            StretchSweep::new(&stencil, MAX_STRETCH).limit_bands(
+                &stencil,
+                &bands,
+                mesh.pinned(),
+                &mut fast,
+                None,
+            );
+            assert_same_bits(&fast, &course);
+        }
     }
 
     #[test]
