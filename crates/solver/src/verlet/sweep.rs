@@ -50,6 +50,56 @@ pub(crate) const DIRECTIONS: [(isize, isize, SpringKind); 6] = [
     (0, -2, SpringKind::Bending),
 ];
 
+/// Which build of the fused pass (`sweep/fused.rs`) a sweep's rows take, if any.
+///
+/// NOTE: only [`Fused::detect`] (and, in tests, [`Fused::builds`]) make one other than
+/// [`Fused::OFF`], after checking that the CPU runs its instructions; the build is private to
+/// this module. So holding a `Fused` is the proof the `unsafe` calls of the pass rest on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Fused(Build);
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+enum Build {
+    Off,
+    /// The pass compiled for AVX2.
+    Avx2,
+    /// The same 256-bit pass compiled with AVX-512VL as well: the very same operations, but
+    /// with 32 vector registers instead of 16 (VL encodes AVX-512's extra registers for 256-bit
+    /// operations). The pass keeps about 40 vectors live in a column group (six springs'
+    /// directions and lengths, the constants, the sums), so with 16 it spills and reloads
+    /// them around every division; measured 0.97 x the AVX2 build's `pinned4` step. Full
+    /// 512-bit vectors were slower (see the README).
+    Avx512Vl,
+}
+
+impl Fused {
+    /// No fused pass: every row takes the portable loops.
+    pub(crate) const OFF: Self = Self(Build::Off);
+
+    /// The fastest build this CPU runs (checked once, then a cached flag).
+    pub(crate) fn detect() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            let vl = std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512vl");
+            return Self(if vl { Build::Avx512Vl } else { Build::Avx2 });
+        }
+        Self::OFF
+    }
+
+    /// Every build this CPU runs, for tests that compare them.
+    #[cfg(test)]
+    pub(crate) fn builds() -> Vec<Self> {
+        let best = Self::detect();
+        match best.0 {
+            Build::Avx512Vl => vec![Self(Build::Avx2), best],
+            Build::Avx2 => vec![best],
+            Build::Off => vec![],
+        }
+    }
+}
+
 /// Zero columns on each side of a row buffer, so a point can read the forces of springs emitted
 /// up to two columns away without bounds tests.
 const PAD: usize = 2;
@@ -169,7 +219,8 @@ impl Stencil {
     /// rows) and `last` (rows `r0..r1`, in `next`), and writes each new position into `next`
     /// (pinned points keep theirs).
     ///
-    /// Runs the AVX2 build of the sweep when the CPU has it (see [`Stencil::sweep_avx2`]).
+    /// Runs the AVX2 build of the sweep when the CPU has it (see [`Stencil::sweep_avx2`]), with
+    /// the best build of the fused pass it runs ([`Fused::detect`]).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn sweep(
         &self,
@@ -181,16 +232,17 @@ impl Stencil {
         r0: usize,
         r1: usize,
     ) {
+        let fused = Fused::detect();
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
+        if fused != Fused::OFF {
+            // SAFETY: a fused build is only detected on a CPU with AVX2 (see `Fused`).
             #[allow(unsafe_code)]
             unsafe {
-                self.sweep_avx2(scratch, params, positions, pinned, next, r0, r1);
+                self.sweep_avx2(fused, scratch, params, positions, pinned, next, r0, r1);
             }
             return;
         }
-        self.sweep_rows::<false>(scratch, params, positions, pinned, next, r0, r1);
+        self.sweep_rows(fused, scratch, params, positions, pinned, next, r0, r1);
     }
 
     /// The sweep compiled for AVX2: four f64 lanes per instruction instead of baseline
@@ -208,6 +260,7 @@ impl Stencil {
     #[target_feature(enable = "avx2")]
     unsafe fn sweep_avx2(
         &self,
+        fused: Fused,
         scratch: &mut RowScratch,
         params: &SweepParams,
         positions: &[Vec3],
@@ -216,18 +269,19 @@ impl Stencil {
         r0: usize,
         r1: usize,
     ) {
-        self.sweep_rows::<true>(scratch, params, positions, pinned, next, r0, r1);
+        self.sweep_rows(fused, scratch, params, positions, pinned, next, r0, r1);
     }
 
     /// The sweep itself, for whatever instruction set the caller was compiled for: everything
-    /// it calls is inlined into it, so [`Stencil::sweep_avx2`] vectorises all of it. Without
-    /// `FUSED` it is the portable sweep; with it, the rows that can take it emit their springs,
-    /// and sum and integrate two rows behind, in one AVX2 pass (`fused`), so `FUSED` must only
-    /// be set in a build for AVX2 ([`Stencil::sweep_avx2`]).
+    /// it calls is inlined into it, so [`Stencil::sweep_avx2`] vectorises all of it. With
+    /// [`Fused::OFF`] it is the portable sweep; otherwise the rows that can take it emit their
+    /// springs, and sum and integrate two rows behind, in one pass of the given build
+    /// (`fused`).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    pub(crate) fn sweep_rows<const FUSED: bool>(
+    pub(crate) fn sweep_rows(
         &self,
+        fused: Fused,
         scratch: &mut RowScratch,
         params: &SweepParams,
         positions: &[Vec3],
@@ -256,7 +310,7 @@ impl Stencil {
         for y in r0..(r1 + 2) {
             // Rows before `r0 + 2` have no row of this band to sum; past the last row there is
             // nothing to emit.
-            let fuse = FUSED && y >= r0 + 2 && self.fusable(params, y);
+            let fuse = fused != Fused::OFF && y >= r0 + 2 && self.fusable(params, y);
             if y < nh {
                 self.load_row(scratch, positions, y);
                 if !fuse {
@@ -268,15 +322,21 @@ impl Stencil {
                 let row = &mut next[(r - r0) * nw..(r - r0 + 1) * nw];
                 let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
                 // Columns already integrated by the fused pass (`fuse` is never set off
-                // x86-64, see `fusable`).
-                let done = match () {
+                // x86-64, see `Fused`).
+                let done = match fused.0 {
                     #[cfg(target_arch = "x86_64")]
-                    // SAFETY: `FUSED` is set only by `sweep_avx2`, which runs on AVX2 CPUs.
+                    // SAFETY: a `Fused` of a build is only made on CPUs that run it.
                     #[allow(unsafe_code)]
-                    () if fuse => unsafe {
+                    Build::Avx2 if fuse => unsafe {
                         self.emit_sum_integrate_avx2(scratch, params, y, positions, row)
                     },
-                    () => {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: as above.
+                    #[allow(unsafe_code)]
+                    Build::Avx512Vl if fuse => unsafe {
+                        self.emit_sum_integrate_avx512vl(scratch, params, y, positions, row)
+                    },
+                    _ => {
                         self.sum_row(scratch, params, r);
                         0
                     }
@@ -287,15 +347,11 @@ impl Stencil {
     }
 
     /// Whether row `y` can take the fused pass: every spring type enabled (a disabled one is a
-    /// row of zeros, which the portable loop writes), every partner row present, a row at
-    /// least one four-lane group wide, and an x86-64 build (the pass is AVX2 code).
+    /// row of zeros, which the portable loop writes), every partner row present and a row at
+    /// least one four-lane group wide.
     #[inline(always)]
     fn fusable(&self, params: &SweepParams, y: usize) -> bool {
-        cfg!(target_arch = "x86_64")
-            && y >= 2
-            && y < self.nh
-            && self.nw >= 4
-            && params.k.iter().all(|&k| k != 0.0)
+        y >= 2 && y < self.nh && self.nw >= 4 && params.k.iter().all(|&k| k != 0.0)
     }
 
     /// Copies row `y` of `positions` into the struct-of-arrays ring.
@@ -498,6 +554,18 @@ mod tests {
         };
         let band = rows.start * nw..rows.end * nw;
         let pinned = mesh.pinned();
+        let mut portable = last[band.clone()].to_vec();
+        stencil.sweep_rows(
+            Fused::OFF,
+            &mut RowScratch::default(),
+            &params,
+            &positions,
+            pinned,
+            &mut portable,
+            rows.start,
+            rows.end,
+        );
+        assert_ne!(portable, last[band.clone()], "the sweep moved the points");
         let mut dispatched = last[band.clone()].to_vec();
         stencil.sweep(
             &mut RowScratch::default(),
@@ -508,18 +576,27 @@ mod tests {
             rows.start,
             rows.end,
         );
-        let mut portable = last[band.clone()].to_vec();
-        stencil.sweep_rows::<false>(
-            &mut RowScratch::default(),
-            &params,
-            &positions,
-            pinned,
-            &mut portable,
-            rows.start,
-            rows.end,
-        );
-        assert_ne!(portable, last[band], "the sweep moved the points");
         assert_same_bits(&dispatched, &portable);
+        // Every build of the fused pass this CPU runs, not only the one dispatched.
+        #[cfg(target_arch = "x86_64")]
+        for fused in Fused::builds() {
+            let mut built = last[band.clone()].to_vec();
+            // SAFETY: `builds` lists only builds this CPU runs, all on AVX2 CPUs.
+            #[allow(unsafe_code)]
+            unsafe {
+                stencil.sweep_avx2(
+                    fused,
+                    &mut RowScratch::default(),
+                    &params,
+                    &positions,
+                    pinned,
+                    &mut built,
+                    rows.start,
+                    rows.end,
+                );
+            }
+            assert_same_bits(&built, &portable);
+        }
     }
 
     #[test]

@@ -42,7 +42,201 @@ fn stream(s: &[f64], start: usize, shift: isize, len: usize) -> &[f64] {
     &s[start.wrapping_add_signed(shift)..][..len]
 }
 
-impl Stencil {
+/// Defines the pass as a method of [`Stencil`] compiled for `$features`, once per build.
+///
+/// NOTE: a macro, not one `#[inline(always)]` body shared by two thin wrappers: the body's
+/// closures (`array::map`) inherit the target features of the function they are written in,
+/// and only then are they and their intrinsics inlined. Written in a featureless body they
+/// became calls in the loop (measured: `try_map` calls for every column group).
+macro_rules! fused_pass {
+    ($(#[$doc:meta])* $name:ident, $features:literal) => {
+        impl Stencil {
+            $(#[$doc])*
+            #[target_feature(enable = $features)]
+            pub(super) fn $name(
+                &self,
+                scratch: &mut RowScratch,
+                params: &SweepParams,
+                y: usize,
+                positions: &[Vec3],
+                next: &mut [Vec3],
+            ) -> usize {
+                let (nw, stride) = (self.nw, self.nw + 2 * PAD);
+                // Every stream below is a checked slice of exactly `nw` values; the loop reads and
+                // writes lanes `j..j + 4` of them with `j + 4 <= nw`.
+                let ring = &scratch.pos[..];
+                let pos = |q: usize, c: usize| ((q % 3) * 3 + c) * stride + PAD;
+                let mut a = [std::ptr::null::<f64>(); 3];
+                let mut b = [[std::ptr::null::<f64>(); 3]; 6];
+                let mut rest = [std::ptr::null::<f64>(); 6];
+                // Per direction, its valid columns `lo..hi` as `lo - 1` and `hi`, for lane compares.
+                let mut above = [_mm256_set1_epi64x(0); 6];
+                let mut below = [_mm256_set1_epi64x(0); 6];
+                for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
+                    let q = y.wrapping_add_signed(dy);
+                    for (c, b) in b[t].iter_mut().enumerate() {
+                        *b = stream(ring, pos(q, c), dx, nw).as_ptr();
+                    }
+                    rest[t] = stream(&self.rest[t], y * nw, 0, nw).as_ptr();
+                    let cols = valid_columns(nw, dx);
+                    above[t] = _mm256_set1_epi64x(cols.start as i64 - 1);
+                    below[t] = _mm256_set1_epi64x(cols.end as i64);
+                }
+                for (c, a) in a.iter_mut().enumerate() {
+                    *a = stream(ring, pos(y, c), 0, nw).as_ptr();
+                }
+
+                // The force ring's three row slots: row y's is written; rows r = y - 2 and r + 1 are
+                // read.
+                let block = 18 * stride;
+                let (s0, tail) = scratch.f[..3 * block].split_at_mut(block);
+                let (s1, s2) = tail.split_at_mut(block);
+                let (own, fr1, fr) = match y % 3 {
+                    0 => (s0, &*s2, &*s1),
+                    1 => (s1, &*s0, &*s2),
+                    _ => (s2, &*s1, &*s0),
+                };
+                let term = |t: usize, c: usize| (t * 3 + c) * stride + PAD;
+                let mut terms = [[std::ptr::null::<f64>(); 6]; 3];
+                let mut far = [[std::ptr::null::<f64>(); 5]; 3];
+                for c in 0..3 {
+                    for (t, term_t) in terms[c].iter_mut().enumerate() {
+                        *term_t = stream(fr, term(t, c), 0, nw).as_ptr();
+                    }
+                    // The springs row r is the far end of, in the sum's order (see `sum_row`).
+                    far[c] = [
+                        stream(fr, term(0, c), 1, nw).as_ptr(),
+                        stream(fr, term(4, c), 2, nw).as_ptr(),
+                        stream(fr1, term(3, c), -1, nw).as_ptr(),
+                        stream(fr1, term(1, c), 0, nw).as_ptr(),
+                        stream(fr1, term(2, c), 1, nw).as_ptr(),
+                    ];
+                }
+                let mut out = [std::ptr::null_mut::<f64>(); 18];
+                let mut rows = own.chunks_exact_mut(stride);
+                for out in &mut out {
+                    if let Some(row) = rows.next() {
+                        *out = row[PAD..][..nw].as_mut_ptr();
+                    }
+                }
+                let mut total = [std::ptr::null_mut::<f64>(); 3];
+                for (total, row) in total.iter_mut().zip(scratch.total.chunks_exact_mut(nw)) {
+                    *total = row[..nw].as_mut_ptr();
+                }
+                // `own` holds 18 rows and `scratch.total` three, so every pointer is set; checked, as
+                // the loop's SAFETY rests on it (once a row, next to 4 * 18 stores a column group).
+                assert!(out.iter().chain(&total).all(|p| !p.is_null()));
+
+                // The rows of points as flat `x, y, z` streams of `3 nw` values.
+                const { assert!(size_of::<Vec3>() == 3 * size_of::<f64>()) };
+                let (pos_row, next_row) = (&positions[..nw], &mut next[..nw]);
+                // SAFETY: a `Vec3` is nalgebra's `repr(C)` matrix over a `repr(transparent)` array
+                // storage, `[[f64; 3]; 1]`: three contiguous f64s with no padding (size checked
+                // above), so `nw` of them are `3 nw` f64s.
+                let p_flat: &[f64] = unsafe { std::slice::from_raw_parts(pos_row.as_ptr().cast(), 3 * nw) };
+                // SAFETY: as above, and `next_row`'s exclusive borrow is handed over for the view's life.
+                let l_flat: &mut [f64] =
+                    unsafe { std::slice::from_raw_parts_mut(next_row.as_mut_ptr().cast(), 3 * nw) };
+                let keep = _mm256_set1_pd(params.keep);
+                let scale = _mm256_set1_pd(params.scale);
+                let k = params.k.map(|k| _mm256_set1_pd(k));
+                let weight = [0, 1, 2].map(|c| _mm256_set1_pd(params.weight[c]));
+                let zero = _mm256_setzero_pd();
+                let lane: __m256i = _mm256_set_epi64x(3, 2, 1, 0);
+                let mut i = 0;
+                while i < nw {
+                    let j = i.min(nw - 4);
+                    // The overlapping last group (`j < i`) recomputes forces and sums, but must not
+                    // integrate its columns again: integration reads what it overwrites.
+                    let integrate = j == i;
+                    i += 4;
+                    let column = _mm256_add_epi64(_mm256_set1_epi64x(j as i64), lane);
+                    // SAFETY (every load and store below): each pointer is the start of a stream of
+                    // `nw` values (checked slices above), and `j + 4 <= nw`. The written streams (row
+                    // y's slot of the force ring, the totals) are disjoint from each other and from
+                    // every stream read after them: the ring's slots are split apart.
+                    unsafe {
+                        let av = [0, 1, 2].map(|c| _mm256_loadu_pd(a[c].add(j)));
+                        // NOTE: the six square roots first, then the six divisions: each division waits
+                        // about 20 cycles for its root, and with the roots issued together the divider
+                        // has the next one queued meanwhile (measured: 0.93 x the separate loops' time
+                        // where root-then-division per direction gave 0.97 x).
+                        let mut dirs = [[zero; 3]; 6];
+                        let mut lens = [zero; 6];
+                        for t in 0..6 {
+                            let d =
+                                [0, 1, 2].map(|c| _mm256_sub_pd(_mm256_loadu_pd(b[t][c].add(j)), av[c]));
+                            let len2 = _mm256_add_pd(
+                                _mm256_add_pd(_mm256_mul_pd(d[0], d[0]), _mm256_mul_pd(d[1], d[1])),
+                                _mm256_mul_pd(d[2], d[2]),
+                            );
+                            lens[t] = _mm256_sqrt_pd(len2);
+                            dirs[t] = d;
+                        }
+                        let mut last = [zero; 3];
+                        for t in 0..6 {
+                            let (d, len) = (dirs[t], lens[t]);
+                            let stretch = _mm256_sub_pd(len, _mm256_loadu_pd(rest[t].add(j)));
+                            let s = _mm256_div_pd(_mm256_mul_pd(k[t], stretch), len);
+                            // A zero-length spring contributes +0.0, as the portable select gives.
+                            let s = _mm256_andnot_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(len, zero), s);
+                            let valid = _mm256_castsi256_pd(_mm256_and_si256(
+                                _mm256_cmpgt_epi64(column, above[t]),
+                                _mm256_cmpgt_epi64(below[t], column),
+                            ));
+                            for c in 0..3 {
+                                last[c] = _mm256_and_pd(valid, _mm256_mul_pd(d[c], s));
+                                _mm256_storeu_pd(out[t * 3 + c].add(j), last[c]);
+                            }
+                        }
+                        // Row r's sum in the course's order: its own six springs, then the ones it is
+                        // the far end of; `last` holds row y's direction-5 forces, the final term.
+                        let mut sums = [zero; 3];
+                        for c in 0..3 {
+                            let mut sum = weight[c];
+                            for term in terms[c] {
+                                sum = _mm256_add_pd(sum, _mm256_loadu_pd(term.add(j)));
+                            }
+                            for term in far[c] {
+                                sum = _mm256_sub_pd(sum, _mm256_loadu_pd(term.add(j)));
+                            }
+                            sum = _mm256_sub_pd(sum, last[c]);
+                            _mm256_storeu_pd(total[c].add(j), sum);
+                            sums[c] = sum;
+                        }
+                        if integrate {
+                            // The four points' forces interleaved as they lie in memory, `x y z x | y z
+                            // x y | z x y z`, then Verlet on three vectors of four values each.
+                            let [fx, fy, fz] = sums;
+                            let xy_even = _mm256_unpacklo_pd(fx, fy);
+                            let xy_odd = _mm256_unpackhi_pd(fx, fy);
+                            let zx = _mm256_unpacklo_pd(fz, xy_odd);
+                            let yz = _mm256_unpackhi_pd(xy_odd, fz);
+                            let f = [
+                                _mm256_permute2f128_pd::<0x20>(xy_even, zx),
+                                _mm256_blend_pd::<0b1100>(yz, xy_even),
+                                _mm256_permute2f128_pd::<0x31>(zx, yz),
+                            ];
+                            for (q, f) in f.into_iter().enumerate() {
+                                let at = 3 * j + 4 * q;
+                                let p = _mm256_loadu_pd(p_flat[at..at + 4].as_ptr());
+                                let l = &mut l_flat[at..at + 4];
+                                let moved =
+                                    _mm256_mul_pd(_mm256_sub_pd(p, _mm256_loadu_pd(l.as_ptr())), keep);
+                                let new = _mm256_add_pd(_mm256_add_pd(p, moved), _mm256_mul_pd(f, scale));
+                                _mm256_storeu_pd(l.as_mut_ptr(), new);
+                            }
+                        }
+                    }
+                }
+                // Integrated: every group but an overlapping last one.
+                nw / 4 * 4
+            }
+        }
+    };
+}
+
+fused_pass!(
     /// The springs of row `y` into the force ring, the summed force of row `r = y - 2` into
     /// `scratch.total`, and the new positions of row `r` into `next` (row `r` of the last
     /// positions, overwritten): what [`Stencil::emit_row`], [`Stencil::sum_row`] and
@@ -50,184 +244,13 @@ impl Stencil {
     /// the others and the columns from the returned one on are not integrated (the caller
     /// finishes both). `positions` is row `r` of the positions; row `y`'s must be in the ring;
     /// `y` must be [`Stencil::fusable`].
-    #[target_feature(enable = "avx2")]
-    pub(super) fn emit_sum_integrate_avx2(
-        &self,
-        scratch: &mut RowScratch,
-        params: &SweepParams,
-        y: usize,
-        positions: &[Vec3],
-        next: &mut [Vec3],
-    ) -> usize {
-        let (nw, stride) = (self.nw, self.nw + 2 * PAD);
-        // Every stream below is a checked slice of exactly `nw` values; the loop reads and
-        // writes lanes `j..j + 4` of them with `j + 4 <= nw`.
-        let ring = &scratch.pos[..];
-        let pos = |q: usize, c: usize| ((q % 3) * 3 + c) * stride + PAD;
-        let mut a = [std::ptr::null::<f64>(); 3];
-        let mut b = [[std::ptr::null::<f64>(); 3]; 6];
-        let mut rest = [std::ptr::null::<f64>(); 6];
-        // Per direction, its valid columns `lo..hi` as `lo - 1` and `hi`, for lane compares.
-        let mut above = [_mm256_set1_epi64x(0); 6];
-        let mut below = [_mm256_set1_epi64x(0); 6];
-        for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
-            let q = y.wrapping_add_signed(dy);
-            for (c, b) in b[t].iter_mut().enumerate() {
-                *b = stream(ring, pos(q, c), dx, nw).as_ptr();
-            }
-            rest[t] = stream(&self.rest[t], y * nw, 0, nw).as_ptr();
-            let cols = valid_columns(nw, dx);
-            above[t] = _mm256_set1_epi64x(cols.start as i64 - 1);
-            below[t] = _mm256_set1_epi64x(cols.end as i64);
-        }
-        for (c, a) in a.iter_mut().enumerate() {
-            *a = stream(ring, pos(y, c), 0, nw).as_ptr();
-        }
+    emit_sum_integrate_avx2,
+    "avx2"
+);
 
-        // The force ring's three row slots: row y's is written; rows r = y - 2 and r + 1 are
-        // read.
-        let block = 18 * stride;
-        let (s0, tail) = scratch.f[..3 * block].split_at_mut(block);
-        let (s1, s2) = tail.split_at_mut(block);
-        let (own, fr1, fr) = match y % 3 {
-            0 => (s0, &*s2, &*s1),
-            1 => (s1, &*s0, &*s2),
-            _ => (s2, &*s1, &*s0),
-        };
-        let term = |t: usize, c: usize| (t * 3 + c) * stride + PAD;
-        let mut terms = [[std::ptr::null::<f64>(); 6]; 3];
-        let mut far = [[std::ptr::null::<f64>(); 5]; 3];
-        for c in 0..3 {
-            for (t, term_t) in terms[c].iter_mut().enumerate() {
-                *term_t = stream(fr, term(t, c), 0, nw).as_ptr();
-            }
-            // The springs row r is the far end of, in the sum's order (see `sum_row`).
-            far[c] = [
-                stream(fr, term(0, c), 1, nw).as_ptr(),
-                stream(fr, term(4, c), 2, nw).as_ptr(),
-                stream(fr1, term(3, c), -1, nw).as_ptr(),
-                stream(fr1, term(1, c), 0, nw).as_ptr(),
-                stream(fr1, term(2, c), 1, nw).as_ptr(),
-            ];
-        }
-        let mut out = [std::ptr::null_mut::<f64>(); 18];
-        let mut rows = own.chunks_exact_mut(stride);
-        for out in &mut out {
-            if let Some(row) = rows.next() {
-                *out = row[PAD..][..nw].as_mut_ptr();
-            }
-        }
-        let mut total = [std::ptr::null_mut::<f64>(); 3];
-        for (total, row) in total.iter_mut().zip(scratch.total.chunks_exact_mut(nw)) {
-            *total = row[..nw].as_mut_ptr();
-        }
-        // `own` holds 18 rows and `scratch.total` three, so every pointer is set; checked, as
-        // the loop's SAFETY rests on it (once a row, next to 4 * 18 stores a column group).
-        assert!(out.iter().chain(&total).all(|p| !p.is_null()));
-
-        // The rows of points as flat `x, y, z` streams of `3 nw` values.
-        const { assert!(size_of::<Vec3>() == 3 * size_of::<f64>()) };
-        let (pos_row, next_row) = (&positions[..nw], &mut next[..nw]);
-        // SAFETY: a `Vec3` is nalgebra's `repr(C)` matrix over a `repr(transparent)` array
-        // storage, `[[f64; 3]; 1]`: three contiguous f64s with no padding (size checked
-        // above), so `nw` of them are `3 nw` f64s.
-        let p_flat: &[f64] = unsafe { std::slice::from_raw_parts(pos_row.as_ptr().cast(), 3 * nw) };
-        // SAFETY: as above, and `next_row`'s exclusive borrow is handed over for the view's life.
-        let l_flat: &mut [f64] =
-            unsafe { std::slice::from_raw_parts_mut(next_row.as_mut_ptr().cast(), 3 * nw) };
-        let keep = _mm256_set1_pd(params.keep);
-        let scale = _mm256_set1_pd(params.scale);
-        let k = params.k.map(|k| _mm256_set1_pd(k));
-        let weight = [0, 1, 2].map(|c| _mm256_set1_pd(params.weight[c]));
-        let zero = _mm256_setzero_pd();
-        let lane: __m256i = _mm256_set_epi64x(3, 2, 1, 0);
-        let mut i = 0;
-        while i < nw {
-            let j = i.min(nw - 4);
-            // The overlapping last group (`j < i`) recomputes forces and sums, but must not
-            // integrate its columns again: integration reads what it overwrites.
-            let integrate = j == i;
-            i += 4;
-            let column = _mm256_add_epi64(_mm256_set1_epi64x(j as i64), lane);
-            // SAFETY (every load and store below): each pointer is the start of a stream of
-            // `nw` values (checked slices above), and `j + 4 <= nw`. The written streams (row
-            // y's slot of the force ring, the totals) are disjoint from each other and from
-            // every stream read after them: the ring's slots are split apart.
-            unsafe {
-                let av = [0, 1, 2].map(|c| _mm256_loadu_pd(a[c].add(j)));
-                // NOTE: the six square roots first, then the six divisions: each division waits
-                // about 20 cycles for its root, and with the roots issued together the divider
-                // has the next one queued meanwhile (measured: 0.93 x the separate loops' time
-                // where root-then-division per direction gave 0.97 x).
-                let mut dirs = [[zero; 3]; 6];
-                let mut lens = [zero; 6];
-                for t in 0..6 {
-                    let d =
-                        [0, 1, 2].map(|c| _mm256_sub_pd(_mm256_loadu_pd(b[t][c].add(j)), av[c]));
-                    let len2 = _mm256_add_pd(
-                        _mm256_add_pd(_mm256_mul_pd(d[0], d[0]), _mm256_mul_pd(d[1], d[1])),
-                        _mm256_mul_pd(d[2], d[2]),
-                    );
-                    lens[t] = _mm256_sqrt_pd(len2);
-                    dirs[t] = d;
-                }
-                let mut last = [zero; 3];
-                for t in 0..6 {
-                    let (d, len) = (dirs[t], lens[t]);
-                    let stretch = _mm256_sub_pd(len, _mm256_loadu_pd(rest[t].add(j)));
-                    let s = _mm256_div_pd(_mm256_mul_pd(k[t], stretch), len);
-                    // A zero-length spring contributes +0.0, as the portable select gives.
-                    let s = _mm256_andnot_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(len, zero), s);
-                    let valid = _mm256_castsi256_pd(_mm256_and_si256(
-                        _mm256_cmpgt_epi64(column, above[t]),
-                        _mm256_cmpgt_epi64(below[t], column),
-                    ));
-                    for c in 0..3 {
-                        last[c] = _mm256_and_pd(valid, _mm256_mul_pd(d[c], s));
-                        _mm256_storeu_pd(out[t * 3 + c].add(j), last[c]);
-                    }
-                }
-                // Row r's sum in the course's order: its own six springs, then the ones it is
-                // the far end of; `last` holds row y's direction-5 forces, the final term.
-                let mut sums = [zero; 3];
-                for c in 0..3 {
-                    let mut sum = weight[c];
-                    for term in terms[c] {
-                        sum = _mm256_add_pd(sum, _mm256_loadu_pd(term.add(j)));
-                    }
-                    for term in far[c] {
-                        sum = _mm256_sub_pd(sum, _mm256_loadu_pd(term.add(j)));
-                    }
-                    sum = _mm256_sub_pd(sum, last[c]);
-                    _mm256_storeu_pd(total[c].add(j), sum);
-                    sums[c] = sum;
-                }
-                if integrate {
-                    // The four points' forces interleaved as they lie in memory, `x y z x | y z
-                    // x y | z x y z`, then Verlet on three vectors of four values each.
-                    let [fx, fy, fz] = sums;
-                    let xy_even = _mm256_unpacklo_pd(fx, fy);
-                    let xy_odd = _mm256_unpackhi_pd(fx, fy);
-                    let zx = _mm256_unpacklo_pd(fz, xy_odd);
-                    let yz = _mm256_unpackhi_pd(xy_odd, fz);
-                    let f = [
-                        _mm256_permute2f128_pd::<0x20>(xy_even, zx),
-                        _mm256_blend_pd::<0b1100>(yz, xy_even),
-                        _mm256_permute2f128_pd::<0x31>(zx, yz),
-                    ];
-                    for (q, f) in f.into_iter().enumerate() {
-                        let at = 3 * j + 4 * q;
-                        let p = _mm256_loadu_pd(p_flat[at..at + 4].as_ptr());
-                        let l = &mut l_flat[at..at + 4];
-                        let moved =
-                            _mm256_mul_pd(_mm256_sub_pd(p, _mm256_loadu_pd(l.as_ptr())), keep);
-                        let new = _mm256_add_pd(_mm256_add_pd(p, moved), _mm256_mul_pd(f, scale));
-                        _mm256_storeu_pd(l.as_mut_ptr(), new);
-                    }
-                }
-            }
-        }
-        // Integrated: every group but an overlapping last one.
-        nw / 4 * 4
-    }
-}
+fused_pass!(
+    /// [`Stencil::emit_sum_integrate_avx2`] compiled with AVX-512VL as well, for its 32
+    /// vector registers (see `Build::Avx512Vl`): the very same 256-bit operations.
+    emit_sum_integrate_avx512vl,
+    "avx2,avx512f,avx512vl"
+);
