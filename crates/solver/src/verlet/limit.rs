@@ -34,6 +34,9 @@ use std::ops::Range;
 use cloth_mesh::Vec3;
 
 use super::sweep::{DIRECTIONS, Stencil, valid_columns};
+
+#[cfg(target_arch = "x86_64")]
+mod prepass;
 use crate::stretch::{Band, StretchBands, for_each_band, inside_bound, limit_one};
 
 /// The sweep's bounds and scratch memory, built for one stencil (rebuilt with it).
@@ -223,7 +226,8 @@ impl BandScratch {
         self.prepass_portable(bounds, stencil, positions, first, rows);
     }
 
-    /// The pre-pass compiled for AVX2 (same operations, four lanes; see `Stencil::sweep_avx2`).
+    /// The pre-pass compiled for AVX2: the copy vectorised by the compiler, the rows with
+    /// every partner row in the window by `prepass::marks_row_avx2`.
     ///
     /// # Safety
     /// The CPU must support AVX2.
@@ -238,10 +242,21 @@ impl BandScratch {
         first: usize,
         rows: Range<usize>,
     ) {
-        self.prepass_portable(bounds, stencil, positions, first, rows);
+        let nw = stencil.nw();
+        self.copy_soa(positions);
+        let offsets = DIRECTIONS.map(|(dx, dy, _)| dx + dy * nw as isize);
+        for (k, y) in rows.enumerate() {
+            let at = Self::margin(nw) + k * nw;
+            let out = &mut self.look[at..at + nw];
+            if y >= 2 && nw >= 4 {
+                prepass::marks_row_avx2(&self.soa, &bounds.floor, offsets, y * nw - first, out);
+            } else {
+                marks_row(&self.soa, bounds, &mut self.row_marks, nw, y, first, out);
+            }
+        }
     }
 
-    #[inline(always)]
+    /// The pre-pass for any CPU.
     fn prepass_portable(
         &mut self,
         bounds: &Bounds,
@@ -251,45 +266,67 @@ impl BandScratch {
         rows: Range<usize>,
     ) {
         let nw = stencil.nw();
+        self.copy_soa(positions);
+        for (k, y) in rows.enumerate() {
+            let at = Self::margin(nw) + k * nw;
+            let out = &mut self.look[at..at + nw];
+            marks_row(&self.soa, bounds, &mut self.row_marks, nw, y, first, out);
+        }
+    }
+
+    /// The window's positions into the struct-of-arrays copy.
+    #[inline(always)]
+    fn copy_soa(&mut self, positions: &[Vec3]) {
         for (c, soa) in self.soa.iter_mut().enumerate() {
             soa.clear();
             soa.extend(positions.iter().map(|p| p[c]));
         }
-        let [px, py, pz] = &self.soa;
-        // NOTE: the marks of a row are gathered in 64-bit words, one per point, the width of a
-        // compare's result, and narrowed to bytes once per row: or-ing each direction's compare
-        // straight into bytes narrowed the four lanes six times a point.
-        self.row_marks.resize(nw, 0);
-        for (k, y) in rows.enumerate() {
-            let row = &mut self.row_marks[..];
-            row.fill(0);
-            for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
-                let cols = valid_columns(nw, dx);
-                if y < (-dy) as usize || cols.is_empty() {
-                    continue;
-                }
-                let a = y * nw + cols.start - first;
-                let b = a.wrapping_add_signed(dx + dy * nw as isize);
-                let len = cols.len();
-                let floor = bounds.floor[t];
-                let (ax, ay, az) = (&px[a..a + len], &py[a..a + len], &pz[a..a + len]);
-                let (bx, by, bz) = (&px[b..b + len], &py[b..b + len], &pz[b..b + len]);
-                let out = &mut row[cols];
-                for i in 0..len {
-                    // NOTE: the course's `positions[b] - positions[a]` and `dist2`, operand for
-                    // operand, so the decision is the sequential check's.
-                    let (ddx, ddy, ddz) = (bx[i] - ax[i], by[i] - ay[i], bz[i] - az[i]);
-                    let len2 = ddx * ddx + ddy * ddy + ddz * ddz;
-                    let inside = len2 <= floor;
-                    out[i] |= u64::from(!inside) << t;
-                }
-            }
-            let at = Self::margin(nw) + k * nw;
-            for (check, &marks) in self.look[at..at + nw].iter_mut().zip(&*row) {
-                // Six direction bits: the narrowing keeps them all.
-                *check = marks as u8;
-            }
+    }
+}
+
+/// The marks of the springs emitted by row `y` (of a window starting at point `first`, copied
+/// into `soa`) into `out`, one byte per point: bit `t` set when its direction-`t` spring exists
+/// and is not proven inside. `row_marks` is scratch.
+#[inline(always)]
+fn marks_row(
+    soa: &[Vec<f64>; 3],
+    bounds: &Bounds,
+    row_marks: &mut Vec<u64>,
+    nw: usize,
+    y: usize,
+    first: usize,
+    out: &mut [u8],
+) {
+    let [px, py, pz] = soa;
+    // NOTE: the marks of a row are gathered in 64-bit words, one per point, the width of a
+    // compare's result, and narrowed to bytes once per row: or-ing each direction's compare
+    // straight into bytes narrowed the four lanes six times a point.
+    row_marks.clear();
+    row_marks.resize(nw, 0);
+    for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
+        let cols = valid_columns(nw, dx);
+        if y < (-dy) as usize || cols.is_empty() {
+            continue;
         }
+        let a = y * nw + cols.start - first;
+        let b = a.wrapping_add_signed(dx + dy * nw as isize);
+        let len = cols.len();
+        let floor = bounds.floor[t];
+        let (ax, ay, az) = (&px[a..a + len], &py[a..a + len], &pz[a..a + len]);
+        let (bx, by, bz) = (&px[b..b + len], &py[b..b + len], &pz[b..b + len]);
+        let marks = &mut row_marks[cols];
+        for i in 0..len {
+            // NOTE: the course's `positions[b] - positions[a]` and `dist2`, operand for
+            // operand, so the decision is the sequential check's.
+            let (ddx, ddy, ddz) = (bx[i] - ax[i], by[i] - ay[i], bz[i] - az[i]);
+            let len2 = ddx * ddx + ddy * ddy + ddz * ddz;
+            let inside = len2 <= floor;
+            marks[i] |= u64::from(!inside) << t;
+        }
+    }
+    for (out, &marks) in out.iter_mut().zip(&*row_marks) {
+        // Six direction bits: the narrowing keeps them all.
+        *out = marks as u8;
     }
 }
 
@@ -446,6 +483,77 @@ mod tests {
                 None,
             );
             assert_same_bits(&fast, &course);
+        }
+    }
+
+    /// The marks of `rows` of `positions` (the whole cloth) by the pre-pass the CPU runs and
+    /// by the portable one, each masked by the springs that exist.
+    fn both_prepasses(
+        stencil: &Stencil,
+        positions: &[Vec3],
+        rows: Range<usize>,
+    ) -> (Vec<u8>, Vec<u8>) {
+        let nw = stencil.nw();
+        let sweep = StretchSweep::new(stencil, MAX_STRETCH);
+        let first = rows.start.saturating_sub(2) * nw;
+        let window = &positions[first..rows.end * nw];
+        let emitters = rows.start * nw..rows.end * nw;
+        let margin = BandScratch::margin(nw);
+        let run = |portable: bool| {
+            let mut scratch = BandScratch::default();
+            scratch.look.resize(margin + emitters.len() + margin, 0);
+            let (bounds, rows) = (&sweep.bounds, rows.clone());
+            if portable {
+                scratch.prepass_portable(bounds, stencil, window, first, rows);
+            } else {
+                scratch.prepass(bounds, stencil, window, first, rows);
+            }
+            let exists = &sweep.bounds.exists[emitters.clone()];
+            let marks = &scratch.look[margin..margin + emitters.len()];
+            marks
+                .iter()
+                .zip(exists)
+                .map(|(m, e)| m & e)
+                .collect::<Vec<u8>>()
+        };
+        (run(false), run(true))
+    }
+
+    #[test]
+    fn the_dispatched_prepass_marks_what_the_portable_one_marks() {
+        // Points jittered so springs fall on both sides of the bounds, one point NaN (all its
+        // springs marked), widths that end in a partial group of four or fit none, and bands
+        // that start inside the cloth, as threads sweep them.
+        for (nw, rows) in [
+            (4, 0..4),
+            (5, 0..5),
+            (7, 0..7),
+            (9, 0..9),
+            (3, 0..3),
+            (53, 0..53),
+            (21, 5..11),
+            (21, 1..2),
+            (21, 14..21),
+        ] {
+            let mesh = pinned_grid(nw).unwrap();
+            let stencil = Stencil::new(&mesh).unwrap();
+            let mut rng = cloth_mesh::SplitMix64::new(nw as u64);
+            let h = 0.06 / (nw - 1) as f64;
+            let mut positions: Vec<Vec3> = mesh
+                .start_positions()
+                .iter()
+                .map(|p| {
+                    p * 1.06 + Vec3::new(rng.uniform(-h, h), rng.uniform(-h, h), rng.uniform(-h, h))
+                })
+                .collect();
+            positions[mesh.len() / 2].y = f64::NAN;
+            let (dispatched, portable) = both_prepasses(&stencil, &positions, rows);
+            let marked = portable.iter().filter(|&&m| m != 0).count();
+            assert!(
+                marked > 0 && marked < portable.len(),
+                "{nw}: the test needs marked and unmarked points"
+            );
+            assert_eq!(dispatched, portable, "{nw} wide");
         }
     }
 
