@@ -69,7 +69,8 @@ macro_rules! fused_pass {
                 let mut a = [std::ptr::null::<f64>(); 3];
                 let mut b = [[std::ptr::null::<f64>(); 3]; 6];
                 let mut rest = [std::ptr::null::<f64>(); 6];
-                // Per direction, its valid columns `lo..hi` as `lo - 1` and `hi`, for lane compares.
+                // Per direction, its valid columns `lo..hi` as `lo - 1` and `hi`, for lane
+                // compares.
                 let mut above = [_mm256_set1_epi64x(0); 6];
                 let mut below = [_mm256_set1_epi64x(0); 6];
                 for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
@@ -86,8 +87,8 @@ macro_rules! fused_pass {
                     *a = stream(ring, pos(y, c), 0, nw).as_ptr();
                 }
 
-                // The force ring's three row slots: row y's is written; rows r = y - 2 and r + 1 are
-                // read.
+                // The force ring's three row slots: row y's is written; rows r = y - 2 and r + 1
+                // are read.
                 let block = 18 * stride;
                 let (s0, tail) = scratch.f[..3 * block].split_at_mut(block);
                 let (s1, s2) = tail.split_at_mut(block);
@@ -123,8 +124,9 @@ macro_rules! fused_pass {
                 for (total, row) in total.iter_mut().zip(scratch.total.chunks_exact_mut(nw)) {
                     *total = row[..nw].as_mut_ptr();
                 }
-                // `own` holds 18 rows and `scratch.total` three, so every pointer is set; checked, as
-                // the loop's SAFETY rests on it (once a row, next to 4 * 18 stores a column group).
+                // `own` holds 18 rows and `scratch.total` three, so every pointer is set; checked,
+                // as the loop's SAFETY rests on it (once a row, next to 4 * 18 stores a column
+                // group).
                 assert!(out.iter().chain(&total).all(|p| !p.is_null()));
 
                 // The rows of points as flat `x, y, z` streams of `3 nw` values.
@@ -133,8 +135,10 @@ macro_rules! fused_pass {
                 // SAFETY: a `Vec3` is nalgebra's `repr(C)` matrix over a `repr(transparent)` array
                 // storage, `[[f64; 3]; 1]`: three contiguous f64s with no padding (size checked
                 // above), so `nw` of them are `3 nw` f64s.
-                let p_flat: &[f64] = unsafe { std::slice::from_raw_parts(pos_row.as_ptr().cast(), 3 * nw) };
-                // SAFETY: as above, and `next_row`'s exclusive borrow is handed over for the view's life.
+                let p_flat: &[f64] =
+                    unsafe { std::slice::from_raw_parts(pos_row.as_ptr().cast(), 3 * nw) };
+                // SAFETY: as above, and `next_row`'s exclusive borrow is handed over for the view's
+                // life.
                 let l_flat: &mut [f64] =
                     unsafe { std::slice::from_raw_parts_mut(next_row.as_mut_ptr().cast(), 3 * nw) };
                 let keep = _mm256_set1_pd(params.keep);
@@ -152,20 +156,20 @@ macro_rules! fused_pass {
                     i += 4;
                     let column = _mm256_add_epi64(_mm256_set1_epi64x(j as i64), lane);
                     // SAFETY (every load and store below): each pointer is the start of a stream of
-                    // `nw` values (checked slices above), and `j + 4 <= nw`. The written streams (row
-                    // y's slot of the force ring, the totals) are disjoint from each other and from
-                    // every stream read after them: the ring's slots are split apart.
+                    // `nw` values (checked slices above), and `j + 4 <= nw`. The written streams
+                    // (row y's slot of the force ring, the totals) are disjoint from each other and
+                    // from every stream read after them: the ring's slots are split apart.
                     unsafe {
                         let av = [0, 1, 2].map(|c| _mm256_loadu_pd(a[c].add(j)));
-                        // NOTE: the six square roots first, then the six divisions: each division waits
-                        // about 20 cycles for its root, and with the roots issued together the divider
-                        // has the next one queued meanwhile (measured: 0.93 x the separate loops' time
-                        // where root-then-division per direction gave 0.97 x).
+                        // NOTE: the six square roots first, then the six divisions: each division
+                        // waits about 20 cycles for its root, and with the roots issued together
+                        // the divider has the next one queued meanwhile (measured: 0.93 x the
+                        // separate loops' time where root-then-division per direction gave 0.97 x).
                         let mut dirs = [[zero; 3]; 6];
                         let mut lens = [zero; 6];
                         for t in 0..6 {
-                            let d =
-                                [0, 1, 2].map(|c| _mm256_sub_pd(_mm256_loadu_pd(b[t][c].add(j)), av[c]));
+                            let d = [0, 1, 2]
+                                .map(|c| _mm256_sub_pd(_mm256_loadu_pd(b[t][c].add(j)), av[c]));
                             let len2 = _mm256_add_pd(
                                 _mm256_add_pd(_mm256_mul_pd(d[0], d[0]), _mm256_mul_pd(d[1], d[1])),
                                 _mm256_mul_pd(d[2], d[2]),
@@ -189,8 +193,9 @@ macro_rules! fused_pass {
                                 _mm256_storeu_pd(out[t * 3 + c].add(j), last[c]);
                             }
                         }
-                        // Row r's sum in the course's order: its own six springs, then the ones it is
-                        // the far end of; `last` holds row y's direction-5 forces, the final term.
+                        // Row r's sum in the course's order: its own six springs, then the ones it
+                        // is the far end of; `last` holds row y's direction-5 forces, the final
+                        // term.
                         let mut sums = [zero; 3];
                         for c in 0..3 {
                             let mut sum = weight[c];
@@ -205,8 +210,8 @@ macro_rules! fused_pass {
                             sums[c] = sum;
                         }
                         if integrate {
-                            // The four points' forces interleaved as they lie in memory, `x y z x | y z
-                            // x y | z x y z`, then Verlet on three vectors of four values each.
+                            // The four points' forces interleaved as they lie in memory, `x y z x |
+                            // y z x y | z x y z`, then Verlet on three vectors of four values each.
                             let [fx, fy, fz] = sums;
                             let xy_even = _mm256_unpacklo_pd(fx, fy);
                             let xy_odd = _mm256_unpackhi_pd(fx, fy);
@@ -221,9 +226,10 @@ macro_rules! fused_pass {
                                 let at = 3 * j + 4 * q;
                                 let p = _mm256_loadu_pd(p_flat[at..at + 4].as_ptr());
                                 let l = &mut l_flat[at..at + 4];
-                                let moved =
-                                    _mm256_mul_pd(_mm256_sub_pd(p, _mm256_loadu_pd(l.as_ptr())), keep);
-                                let new = _mm256_add_pd(_mm256_add_pd(p, moved), _mm256_mul_pd(f, scale));
+                                let previous = _mm256_loadu_pd(l.as_ptr());
+                                let moved = _mm256_mul_pd(_mm256_sub_pd(p, previous), keep);
+                                let new =
+                                    _mm256_add_pd(_mm256_add_pd(p, moved), _mm256_mul_pd(f, scale));
                                 _mm256_storeu_pd(l.as_mut_ptr(), new);
                             }
                         }
