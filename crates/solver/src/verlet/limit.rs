@@ -33,7 +33,7 @@ use std::ops::Range;
 
 use cloth_mesh::Vec3;
 
-use super::sweep::{DIRECTIONS, Stencil, valid_columns};
+use super::sweep::{DIRECTIONS, Stencil, offsets, valid_columns};
 
 #[cfg(target_arch = "x86_64")]
 mod prepass;
@@ -69,7 +69,7 @@ struct BandScratch {
     /// take the marks a moved point leaves for emitters outside the band, so marking needs no
     /// tests.
     look: Vec<u8>,
-    /// The pre-pass's marks of one row, a word per point (see `prepass_portable`).
+    /// The pre-pass's marks of one row, a word per point (see `marks_row`).
     row_marks: Vec<u64>,
 }
 
@@ -157,7 +157,7 @@ impl BandScratch {
         self.look.resize(margin + emitters.len() + margin, 0);
         self.prepass(bounds, stencil, positions, first, rows);
 
-        let offsets = DIRECTIONS.map(|(dx, dy, _)| dx + dy * nw as isize);
+        let offsets = offsets(nw);
         // Every offset is negative (partners are earlier points), so the direction-`t` spring
         // ending at point `p` is emitted by `p - offsets[t]`, after `p`.
         let ahead = offsets.map(isize::unsigned_abs);
@@ -242,18 +242,8 @@ impl BandScratch {
         first: usize,
         rows: Range<usize>,
     ) {
-        let nw = stencil.nw();
-        self.copy_soa(positions);
-        let offsets = DIRECTIONS.map(|(dx, dy, _)| dx + dy * nw as isize);
-        for (k, y) in rows.enumerate() {
-            let at = Self::margin(nw) + k * nw;
-            let out = &mut self.look[at..at + nw];
-            if y >= 2 && nw >= 4 {
-                prepass::marks_row_avx2(&self.soa, &bounds.floor, offsets, y * nw - first, out);
-            } else {
-                marks_row(&self.soa, bounds, &mut self.row_marks, nw, y, first, out);
-            }
-        }
+        // SAFETY: the CPU supports AVX2, this function's contract.
+        unsafe { self.prepass_rows(bounds, stencil, positions, first, rows, true) };
     }
 
     /// The pre-pass for any CPU.
@@ -265,13 +255,48 @@ impl BandScratch {
         first: usize,
         rows: Range<usize>,
     ) {
+        // SAFETY: no vector rows.
+        #[allow(unsafe_code)]
+        unsafe {
+            self.prepass_rows(bounds, stencil, positions, first, rows, false);
+        }
+    }
+
+    /// The pre-pass itself, for whatever instruction set the caller was compiled for. With
+    /// `vector_rows`, the rows with every partner row in the window take
+    /// `prepass::marks_row_avx2`.
+    ///
+    /// # Safety
+    /// With `vector_rows`, the CPU must support AVX2.
+    #[allow(unsafe_code)]
+    #[inline(always)]
+    unsafe fn prepass_rows(
+        &mut self,
+        bounds: &Bounds,
+        stencil: &Stencil,
+        positions: &[Vec3],
+        first: usize,
+        rows: Range<usize>,
+        vector_rows: bool,
+    ) {
         let nw = stencil.nw();
         self.copy_soa(positions);
+        let offsets = offsets(nw);
         for (k, y) in rows.enumerate() {
             let at = Self::margin(nw) + k * nw;
             let out = &mut self.look[at..at + nw];
+            #[cfg(target_arch = "x86_64")]
+            if vector_rows && y >= 2 && nw >= 4 {
+                // SAFETY: with `vector_rows` the CPU supports AVX2 (this function's contract).
+                unsafe {
+                    prepass::marks_row_avx2(&self.soa, &bounds.floor, offsets, y * nw - first, out);
+                }
+                continue;
+            }
             marks_row(&self.soa, bounds, &mut self.row_marks, nw, y, first, out);
         }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = (vector_rows, offsets);
     }
 
     /// The window's positions into the struct-of-arrays copy.
@@ -415,7 +440,7 @@ mod tests {
     /// were inside the limit at the start: those the sweep finds only through moved-point
     /// marks.
     fn cascaded(mesh: &cloth_mesh::ClothMesh, start: &[Vec3]) -> [usize; 6] {
-        let nw = mesh.nw() as isize;
+        let offsets = offsets(mesh.nw());
         let mut positions = start.to_vec();
         let mut counts = [0; 6];
         for s in mesh.springs() {
@@ -424,10 +449,7 @@ mod tests {
             let corrected = limit_one(a, b, s.rest, mesh.pinned(), &mut positions, MAX_STRETCH);
             if inside && corrected {
                 let off = b as isize - a as isize;
-                let t = DIRECTIONS
-                    .iter()
-                    .position(|&(dx, dy, _)| dx + dy * nw == off)
-                    .unwrap();
+                let t = offsets.iter().position(|&o| o == off).unwrap();
                 counts[t] += 1;
             }
         }

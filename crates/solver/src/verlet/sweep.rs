@@ -443,6 +443,12 @@ impl Stencil {
     }
 }
 
+/// Per direction, the index of a point's partner relative to the point, in a grid `nw` wide
+/// (all negative: partners are earlier points).
+pub(crate) fn offsets(nw: usize) -> [isize; 6] {
+    DIRECTIONS.map(|(dx, dy, _)| dx + dy * nw as isize)
+}
+
 /// The columns `x` whose direction-`dx` partner `x + dx` lies inside a row of `nw` points.
 pub(crate) fn valid_columns(nw: usize, dx: isize) -> std::ops::Range<usize> {
     let lo = (-dx).max(0) as usize;
