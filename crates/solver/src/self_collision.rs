@@ -6,6 +6,36 @@ use rayon::prelude::*;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 
+/// Off x86-64 there are no lanes: an uninhabited stand-in with their interface, so the pair
+/// search (`Pairs`) reads the same on every target and never holds one.
+#[cfg(not(target_arch = "x86_64"))]
+mod lanes {
+    use cloth_mesh::Vec3;
+
+    /// No bound: no lanes are ever made here.
+    pub(super) const MAX_POINTS: usize = usize::MAX;
+
+    pub(super) enum BoxLanes {}
+
+    impl BoxLanes {
+        pub(super) fn new() -> Option<Self> {
+            None
+        }
+        pub(super) fn load(&mut self, _: &[Vec3]) {
+            match *self {}
+        }
+        pub(super) fn set(&mut self, _: usize, _: &Vec3) {
+            match *self {}
+        }
+        pub(super) fn closest_pair_out_of_reach(&self, _: f64) -> Option<f64> {
+            match *self {}
+        }
+        pub(super) fn within_reach(&self, _: usize, _: f64) -> u64 {
+            match *self {}
+        }
+    }
+}
+
 /// A spatial hash of the cloth's points in boxes of `3 * width / nw` by `3 * height / nh` by the
 /// larger of the two, exactly the course's boxes, so the same pairs of points interact.
 ///
@@ -729,7 +759,7 @@ impl Boxes<'_> {
         let start = self.start;
         let (lo, hi) = (start[cells.start] as usize, start[cells.end] as usize);
         if !self.threaded || hi - lo <= PARALLEL_CHUNK || cells.len() < 2 {
-            let mut scratch = lane_scratch();
+            let mut scratch = lanes::BoxLanes::new();
             for (c, (touched, memory)) in cells.zip(touched.iter_mut().zip(memory)) {
                 let range = start[c] as usize..start[c + 1] as usize;
                 let window = range.start - offset..range.end - offset;
@@ -849,7 +879,6 @@ impl Boxes<'_> {
 /// loops. Both find the same pairs (see `lanes`).
 enum Pairs<'a> {
     Scalar,
-    #[cfg(target_arch = "x86_64")]
     Lanes(&'a mut lanes::BoxLanes),
 }
 
@@ -858,35 +887,21 @@ enum Pairs<'a> {
 /// leaves at that pair (measured: from 8 points, criterion's `self_collision/pass/64`, nine
 /// points a box, took 1.4 x the scalar time; from 16, 1.05 x, and the folded 256 x 256 cloth
 /// gains as much as from 8).
-#[cfg(target_arch = "x86_64")]
 const LANES_FROM: usize = 16;
 
 /// The lanes a task loads boxes into, when the CPU has them.
-#[cfg(target_arch = "x86_64")]
 type LaneScratch = Option<lanes::BoxLanes>;
-#[cfg(not(target_arch = "x86_64"))]
-type LaneScratch = ();
-
-/// New lane scratch for a task.
-#[inline]
-fn lane_scratch() -> LaneScratch {
-    #[cfg(target_arch = "x86_64")]
-    return lanes::BoxLanes::new();
-}
 
 impl<'a> Pairs<'a> {
     /// The search for the box at `slots`, loaded into `scratch` when lanes take it.
     #[inline]
     fn new(slots: &[Vec3], scratch: &'a mut LaneScratch) -> Self {
-        #[cfg(target_arch = "x86_64")]
         if (LANES_FROM..=lanes::MAX_POINTS).contains(&slots.len())
             && let Some(lanes) = scratch
         {
             lanes.load(slots);
             return Self::Lanes(lanes);
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = (slots, scratch);
         Self::Scalar
     }
 
@@ -895,7 +910,6 @@ impl<'a> Pairs<'a> {
     fn closest_pair_out_of_reach(&self, repulsion: &Repulsion, slots: &[Vec3]) -> Option<f64> {
         match self {
             Self::Scalar => repulsion.closest_pair_out_of_reach(slots),
-            #[cfg(target_arch = "x86_64")]
             Self::Lanes(lanes) => lanes.closest_pair_out_of_reach(repulsion.reach2_out),
         }
     }
@@ -905,7 +919,6 @@ impl<'a> Pairs<'a> {
     fn corrected(&self, repulsion: &Repulsion, slots: &[Vec3], me: usize) -> Option<Vec3> {
         match self {
             Self::Scalar => repulsion.corrected(slots, me, (0..slots.len()).filter(|&k| k != me)),
-            #[cfg(target_arch = "x86_64")]
             Self::Lanes(lanes) => {
                 let mut within = lanes.within_reach(me, repulsion.reach2_out);
                 let found = std::iter::from_fn(|| {
@@ -925,7 +938,6 @@ impl<'a> Pairs<'a> {
     fn moved(&mut self, k: usize, p: &Vec3) {
         match self {
             Self::Scalar => {}
-            #[cfg(target_arch = "x86_64")]
             Self::Lanes(lanes) => lanes.set(k, p),
         }
     }
@@ -1175,11 +1187,10 @@ mod tests {
     }
 
     #[test]
-    #[cfg(target_arch = "x86_64")]
     fn lanes_find_the_pairs_and_make_the_corrections_of_the_scalar_loops() {
-        let mut scratch = lane_scratch();
+        let mut scratch = lanes::BoxLanes::new();
         if scratch.is_none() {
-            return; // No AVX2: no lanes to compare.
+            return; // No AVX2 (or not x86-64): no lanes to compare.
         }
         let reach = 0.019;
         let repulsion = Repulsion {

@@ -89,7 +89,7 @@ impl Fused {
     }
 
     /// Every build this CPU runs, for tests that compare them.
-    #[cfg(test)]
+    #[cfg(all(test, target_arch = "x86_64"))]
     pub(crate) fn builds() -> Vec<Self> {
         let best = Self::detect();
         match best.0 {
