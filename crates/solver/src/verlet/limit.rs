@@ -223,7 +223,11 @@ impl BandScratch {
             }
             return;
         }
-        self.prepass_portable(bounds, stencil, positions, first, rows);
+        // SAFETY: no vector rows.
+        #[allow(unsafe_code)]
+        unsafe {
+            self.prepass_rows(bounds, stencil, positions, first, rows, false);
+        }
     }
 
     /// The pre-pass compiled for AVX2: the copy vectorised by the compiler, the rows with
@@ -244,22 +248,6 @@ impl BandScratch {
     ) {
         // SAFETY: the CPU supports AVX2, this function's contract.
         unsafe { self.prepass_rows(bounds, stencil, positions, first, rows, true) };
-    }
-
-    /// The pre-pass for any CPU.
-    fn prepass_portable(
-        &mut self,
-        bounds: &Bounds,
-        stencil: &Stencil,
-        positions: &[Vec3],
-        first: usize,
-        rows: Range<usize>,
-    ) {
-        // SAFETY: no vector rows.
-        #[allow(unsafe_code)]
-        unsafe {
-            self.prepass_rows(bounds, stencil, positions, first, rows, false);
-        }
     }
 
     /// The pre-pass itself, for whatever instruction set the caller was compiled for. With
@@ -526,7 +514,11 @@ mod tests {
             scratch.look.resize(margin + emitters.len() + margin, 0);
             let (bounds, rows) = (&sweep.bounds, rows.clone());
             if portable {
-                scratch.prepass_portable(bounds, stencil, window, first, rows);
+                // SAFETY: no vector rows.
+                #[allow(unsafe_code)]
+                unsafe {
+                    scratch.prepass_rows(bounds, stencil, window, first, rows, false);
+                }
             } else {
                 scratch.prepass(bounds, stencil, window, first, rows);
             }
