@@ -42,7 +42,7 @@ pub struct BenchResult {
     pub frames: u32,
     /// Steps per frame.
     pub steps_per_frame: u32,
-    /// Wall-clock seconds for the timed frames.
+    /// Wall-clock seconds of the timed frames, summed.
     pub seconds: f64,
     /// The median of the timed frames' wall-clock seconds: unlike the mean, it shrugs off the
     /// frames during which another process took the CPU.
@@ -92,21 +92,10 @@ pub fn time_frames(
     state: &mut ClothState,
     run: BenchRun,
 ) -> Result<BenchResult, SolveError> {
-    for _ in 0..run.warmup_frames {
-        advance_frame(solver, mesh, colliders, params, state)?;
-    }
-    // Allocated before the clock starts; one clock reading per frame costs tens of nanoseconds.
-    let mut frame_seconds = Vec::with_capacity(run.frames as usize);
-    let start = Instant::now();
-    let mut frame_start = start;
-    for _ in 0..run.frames {
-        advance_frame(solver, mesh, colliders, params, state)?;
-        let now = Instant::now();
-        frame_seconds.push((now - frame_start).as_secs_f64());
-        frame_start = now;
-    }
-    let seconds = start.elapsed().as_secs_f64();
-    Ok(result(mesh, params, seconds, &mut frame_seconds))
+    let mut runs: [(&mut dyn Solver, &mut ClothState); 1] = [(solver, state)];
+    let mut timed =
+        time_interleaved(&mut runs, mesh, colliders, params, run).map_err(|(_, e)| e)?;
+    Ok(timed.swap_remove(0).result)
 }
 
 /// The outcome of `frame_seconds.len()` frames that took `seconds` in all.
@@ -138,11 +127,11 @@ pub struct InterleavedResult {
     pub time_ratio_to_first: f64,
 }
 
-/// Like [`time_frames`] for several runs on one mesh, each a solver advancing its own state,
-/// but with their frames taken in turn: every run warms up, then each round times one frame
-/// of every run. On a shared machine whose speed drifts by tens of percent within a minute
-/// (as cloud machines' do), runs timed one after the other compare moments as much as code;
-/// runs timed in turn see the same moments.
+/// [`time_frames`] for several runs on one mesh, each a solver advancing its own state, with their
+/// frames taken in turn (with one run, that is [`time_frames`]): every run warms up, then each
+/// round times one frame of every run. On a shared machine whose speed drifts by tens of percent
+/// within a minute (as cloud machines' do), runs timed one after the other compare moments as much
+/// as code; runs timed in turn see the same moments.
 ///
 /// # Errors
 /// The index of the run and the first [`SolveError`] of any of its frames.
