@@ -70,12 +70,13 @@ pub(crate) fn inside_bound(max: f64) -> f64 {
 /// The stretch limit's sweep cut into row bands that threads can share
 /// ([`ConstraintOrder::Parallel`]).
 ///
-/// Springs are emitted row by row and reach at most two rows back, so the springs of a run of
-/// rows are a contiguous part of the spring list and touch only those rows and the two before.
-/// The rows are cut into blocks separated by two-row seams: the blocks touch disjoint points and
-/// are swept at once, each in spring order (by the Verlet solver's sweep, `verlet/limit.rs`); then the seams (also disjoint from each other) are
-/// swept at once. Every spring is visited exactly once and corrected exactly as in the course;
-/// only a seam's springs come after the block above them instead of before.
+/// Springs are emitted row by row and reach at most two rows back, so the springs of a run of rows
+/// are a contiguous part of the spring list and touch only those rows and the two before. The rows
+/// are cut into blocks separated by two-row seams: the blocks touch disjoint points and are swept
+/// at once, each in spring order (by the Verlet solver's sweep, `verlet/limit.rs`); then the seams
+/// (also disjoint from each other) are swept at once. Every spring is visited exactly once and
+/// corrected exactly as in the course; only a seam's springs come after the block above them
+/// instead of before.
 ///
 /// NOTE: the cut depends only on the mesh (at most [`StretchBands::BLOCKS`] blocks), never on the
 /// thread count, so results are the same on any number of threads.

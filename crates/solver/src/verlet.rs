@@ -19,14 +19,15 @@
 //!
 //! # Speed
 //!
-//! Steps 1 and 2 run as one sweep over the grid's rows on struct-of-arrays row buffers
-//! (`sweep`), bit-identical to the course's spring loop, compiled for AVX2 when the CPU has it
-//! (with each row's springs, and the sums and the Verlet update two rows behind, in one loop,
-//! so that work runs in the divider's shadow) and shared between threads by rows. Self-collision groups points with a linear counting sort
-//! and skips boxes with no pair within reach; the stretch limit checks only the springs a
-//! vectorised pre-pass could not prove inside the limit, or with an end already moved
-//! (`limit`). With [`ConstraintOrder::Faithful`] (the default) steps 3 and 5 keep the course's
-//! sequential order and results; [`ConstraintOrder::Parallel`] trades that order for threads.
+//! Steps 1 and 2 run as one sweep over the grid's rows on struct-of-arrays row buffers (`sweep`),
+//! bit-identical to the course's spring loop, compiled for AVX2 when the CPU has it (with each
+//! row's springs, and the sums and the Verlet update two rows behind, in one loop, so that work
+//! runs in the divider's shadow) and shared between threads by rows. Self-collision groups points
+//! with a linear counting sort and skips boxes with no pair within reach; the stretch limit checks
+//! only the springs a vectorised pre-pass could not prove inside the limit, or with an end already
+//! moved (`limit`). With [`ConstraintOrder::Faithful`] (the default) steps 3 and 5 keep the
+//! course's sequential order and results; [`ConstraintOrder::Parallel`] trades that order for
+//! threads.
 
 mod limit;
 mod sweep;

@@ -31,7 +31,11 @@ pub struct Args {
     #[arg(long = "solver", default_values_t = [SolverKind::Verlet])]
     solvers: Vec<SolverKind>,
     /// Worker threads for the Verlet solver (repeatable), e.g. `--threads 1 --threads 2`.
-    #[arg(long = "threads", default_values_t = [1], value_parser = clap::value_parser!(u16).range(1..=256))]
+    #[arg(
+        long = "threads",
+        default_values_t = [1],
+        value_parser = clap::value_parser!(u16).range(1..=256)
+    )]
     threads: Vec<u16>,
     /// Self-collision on or off.
     #[arg(long = "self-collision", value_enum, default_value_t = Switch::On)]
