@@ -50,12 +50,17 @@ fn thread_count_never_changes_results() {
     let mesh = pinned_grid(96).unwrap();
     let frames = 20;
     for order in [ConstraintOrder::Faithful, ConstraintOrder::Parallel] {
-        let one = Verlet::new().with_order(order);
-        let two = Verlet::new().with_order(order).with_threads(2).unwrap();
-        assert_eq!(two.threads(), 2);
-        let (a, _) = settle(&mesh, one, frames);
-        let (b, _) = settle(&mesh, two, frames);
-        assert!(a == b, "{order:?}: one and two threads differ");
+        let (one, _) = settle(&mesh, Verlet::new().with_order(order), frames);
+        // Three threads too: more threads than this machine's two cores, and two pollers.
+        for threads in [2, 3] {
+            let many = Verlet::new()
+                .with_order(order)
+                .with_threads(threads)
+                .unwrap();
+            assert_eq!(many.threads(), threads);
+            let (b, _) = settle(&mesh, many, frames);
+            assert!(one == b, "{order:?}: one and {threads} threads differ");
+        }
     }
 }
 
@@ -92,4 +97,44 @@ fn parallel_order_settles_within_a_tenth_of_the_thickness_of_the_faithful_cloth(
     let (banded, _) = settle(&mesh, parallel(), SETTLE_FRAMES);
     let d = max_distance(&faithful, &banded);
     assert!(d < mesh.thickness() / 10.0, "largest difference {d} m");
+}
+
+#[test]
+fn threads_report_a_non_finite_point_as_one_thread_does() {
+    // 96 x 96 points: the threaded finiteness check cuts each array into several tasks. A NaN
+    // in a pinned point's last position stays there (pinned points keep their last position),
+    // so only the check of the last positions sees it; a NaN or an infinity elsewhere spreads
+    // to the positions within a step. Wherever it is, both thread counts must name the same
+    // first point.
+    let mesh = pinned_grid(96).unwrap();
+    let params = StepParams::default();
+    let pin = mesh.pinned().iter().rposition(|&p| p).unwrap();
+    let poisons: [(usize, bool, f64); 3] = [
+        (pin, false, f64::NAN),
+        (mesh.len() - 10, true, f64::INFINITY),
+        (50 * 96 + 7, false, f64::NAN),
+    ];
+    for (point, in_positions, value) in poisons {
+        let report = |mut solver: Verlet| {
+            let mut state = ClothState::new(&mesh);
+            advance_frame(&mut solver, &mesh, &[], &params, &mut state).unwrap();
+            let target = if in_positions {
+                &mut state.positions
+            } else {
+                &mut state.last
+            };
+            target[point].y = value;
+            solver.step(&mesh, &[], &params, &mut state).unwrap_err()
+        };
+        let one = report(Verlet::new());
+        let two = report(Verlet::new().with_threads(2).unwrap());
+        let cloth_solver::SolveError::NonFinite { point: first, .. } = one else {
+            panic!("one thread: {one}");
+        };
+        assert!(
+            first <= point,
+            "{point}: the first non-finite point is {first}"
+        );
+        assert_eq!(one.to_string(), two.to_string(), "{point}");
+    }
 }
