@@ -719,7 +719,7 @@ const ANCHOR_WAIT: u32 = 4;
 const MAX_STRIKES: u32 = 6;
 
 /// Points a thread takes at once in the threaded passes: enough to amortise rayon's task cost.
-const PARALLEL_CHUNK: usize = 4096;
+pub(crate) const PARALLEL_CHUNK: usize = 4096;
 
 /// What the self-collision pass shares between its tasks.
 struct Boxes<'a> {

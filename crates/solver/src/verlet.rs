@@ -39,6 +39,7 @@ use cloth_mesh::{ClothMesh, ClothState, Vec3};
 use rayon::prelude::*;
 
 use crate::params::MAX_STRETCH;
+use crate::self_collision::PARALLEL_CHUNK;
 use crate::stretch::StretchBands;
 use crate::{
     Collider, SolveError, Solver, SpatialHash, StepParams, StepReport, apply_colliders,
@@ -325,14 +326,13 @@ fn poll_until(done: &AtomicBool) {
 }
 
 /// Whether every coordinate of `a` and `b` is finite, on `pool`'s threads for a big cloth (a
-/// 256 x 256 cloth's two arrays took 3 % of a step on one thread).
+/// 256 x 256 cloth's two arrays took 3 % of a step on one thread), in tasks of the threaded
+/// passes' size.
 fn both_finite(a: &[Vec3], b: &[Vec3], pool: Option<&rayon::ThreadPool>) -> bool {
-    // Big enough to be worth a task, small enough for two threads to share a 256 x 256 cloth.
-    const CHUNK: usize = 8192;
     match pool {
-        Some(pool) if a.len() > CHUNK => pool.install(|| {
-            a.par_chunks(CHUNK)
-                .chain(b.par_chunks(CHUNK))
+        Some(pool) if a.len() > PARALLEL_CHUNK => pool.install(|| {
+            a.par_chunks(PARALLEL_CHUNK)
+                .chain(b.par_chunks(PARALLEL_CHUNK))
                 .all(all_finite)
         }),
         _ => all_finite(a) && all_finite(b),
