@@ -269,7 +269,6 @@ impl BandScratch {
     ) {
         let nw = stencil.nw();
         self.copy_soa(positions);
-        let offsets = offsets(nw);
         for (k, y) in rows.enumerate() {
             let at = Self::margin(nw) + k * nw;
             let out = &mut self.look[at..at + nw];
@@ -277,14 +276,14 @@ impl BandScratch {
             if vector_rows && y >= 2 && nw >= 4 {
                 // SAFETY: with `vector_rows` the CPU supports AVX2 (this function's contract).
                 unsafe {
-                    prepass::marks_row_avx2(&self.soa, &bounds.floor, offsets, y * nw - first, out);
+                    prepass::marks_row_avx2(&self.soa, &bounds.floor, y * nw - first, out);
                 }
                 continue;
             }
             marks_row(&self.soa, bounds, &mut self.row_marks, nw, y, first, out);
         }
         #[cfg(not(target_arch = "x86_64"))]
-        let _ = (vector_rows, offsets);
+        let _ = vector_rows;
     }
 
     /// The window's positions into the struct-of-arrays copy.
