@@ -104,6 +104,75 @@ impl Fused {
 /// up to two columns away without bounds tests.
 const PAD: usize = 2;
 
+/// Declares the row strides the fused pass is compiled for, and its dispatch by stride.
+///
+/// NOTE: the fused pass reads and writes about 80 streams, the rows of the rings, and with a
+/// stride known only at run time each is a pointer of its own: with 16 general registers, 94
+/// of the loop's 319 instructions per column group reloaded them from the stack. With the
+/// stride a constant, every stream of a ring slot is the slot's pointer plus a fixed offset,
+/// and the reloads go. So the rings' stride is rounded up to one of a few classes (each at most
+/// 1.5 times the one before, so a ring grows by less than half), and the pass is compiled once
+/// per class; wider rows take a build with the stride a variable.
+macro_rules! ring_strides {
+    ($($stride:literal),+) => {
+        /// The row strides the fused pass is compiled for, smallest first: a power of two
+        /// or 1.5 times one, plus `2 PAD` (so rows of a power of two points fit exactly).
+        const RING_STRIDES: &[usize] = &[$($stride),+];
+
+        /// Runs `build`'s fused pass (a build other than [`Build::Off`]) compiled for the
+        /// scratch's stride, or the one with the stride a variable when it is not in
+        /// [`RING_STRIDES`].
+        ///
+        /// # Safety
+        /// The CPU must run `build` (see [`Fused`]).
+        #[cfg(target_arch = "x86_64")]
+        #[allow(unsafe_code)]
+        unsafe fn fused_pass(
+            build: Build,
+            stencil: &Stencil,
+            scratch: &mut RowScratch,
+            params: &SweepParams,
+            y: usize,
+            positions: &[Vec3],
+            next: &mut [Vec3],
+        ) -> usize {
+            // SAFETY (every call): the caller's contract.
+            unsafe {
+                match (build, scratch.stride) {
+                    $(
+                        (Build::Avx2, $stride) => stencil
+                            .emit_sum_integrate_avx2::<$stride>(scratch, params, y, positions, next),
+                        (Build::Avx512Vl, $stride) => stencil
+                            .emit_sum_integrate_avx512vl::<$stride>(scratch, params, y, positions, next),
+                    )+
+                    (Build::Avx2, _) => {
+                        stencil.emit_sum_integrate_avx2::<0>(scratch, params, y, positions, next)
+                    }
+                    (Build::Avx512Vl, _) => {
+                        stencil.emit_sum_integrate_avx512vl::<0>(scratch, params, y, positions, next)
+                    }
+                    (Build::Off, _) => unreachable!("no fused pass is run without a build"),
+                }
+            }
+        }
+    };
+}
+
+ring_strides!(
+    12, 20, 28, 36, 52, 68, 100, 132, 196, 260, 388, 516, 772, 1028
+);
+
+/// The row stride of the rings for rows of `nw` points: the smallest of [`RING_STRIDES`] that
+/// holds a row and its padding, or just that for wider rows.
+fn ring_stride(nw: usize) -> usize {
+    let needed = nw + 2 * PAD;
+    RING_STRIDES
+        .iter()
+        .copied()
+        .find(|&stride| stride >= needed)
+        .unwrap_or(needed)
+}
+
 /// The mesh's springs rearranged by direction; rebuilt only when the mesh changes.
 #[derive(Debug, Clone)]
 pub(crate) struct Stencil {
@@ -135,16 +204,17 @@ pub(crate) struct SweepParams {
 /// summed forces), grown once.
 #[derive(Debug, Default, Clone)]
 pub(crate) struct RowScratch {
-    /// `pos[((row % 3) * 3 + c) * stride + PAD + x]`.
+    /// `pos[((row % 3) * 3 + c) * stride + PAD + x]`, `stride` being [`RowScratch::stride`].
     pos: Vec<f64>,
     /// `f[(((row % 3) * 6 + t) * 3 + c) * stride + PAD + x]`.
     f: Vec<f64>,
-    /// Summed force of the row being integrated, `total[c * nw + x]`.
+    /// Summed force of the row being integrated, `total[c * stride + x]`.
     total: Vec<f64>,
     /// A row of zero forces, standing for the springs of rows past the last one.
     zeros: Vec<f64>,
-    /// The row stride `f` was laid out and zeroed for (0: never).
-    f_stride: usize,
+    /// The row stride ([`ring_stride`]) the buffers were laid out for, and `f` zeroed for
+    /// (0: never).
+    stride: usize,
 }
 
 impl Stencil {
@@ -291,18 +361,18 @@ impl Stencil {
         r1: usize,
     ) {
         let (nw, nh) = (self.nw, self.nh);
-        let stride = nw + 2 * PAD;
+        let stride = ring_stride(nw);
         scratch.pos.resize(3 * 3 * stride, 0.0);
-        if scratch.f_stride != stride {
+        if scratch.stride != stride {
             // NOTE: zeroed once per layout. Spring forces are only ever written to a
             // direction's valid columns (or a whole row of zeros), so the columns outside them
             // stay zero from here on, and `emit_row` need not clear them each row (that was
             // 36 tiny `memset` calls a row).
             scratch.f.clear();
             scratch.f.resize(3 * 6 * 3 * stride, 0.0);
-            scratch.f_stride = stride;
+            scratch.stride = stride;
         }
-        scratch.total.resize(3 * nw, 0.0);
+        scratch.total.resize(3 * stride, 0.0);
         scratch.zeros.resize(nw, 0.0);
         for y in r0.saturating_sub(2)..r0 {
             self.load_row(scratch, positions, y);
@@ -323,25 +393,21 @@ impl Stencil {
                 let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
                 // Columns already integrated by the fused pass (`fuse` is never set off
                 // x86-64, see `Fused`).
-                let done = match fused.0 {
+                let done = if fuse {
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: a `Fused` of a build is only made on CPUs that run it.
                     #[allow(unsafe_code)]
-                    Build::Avx2 if fuse => unsafe {
-                        self.emit_sum_integrate_avx2(scratch, params, y, positions, row)
-                    },
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: as above.
-                    #[allow(unsafe_code)]
-                    Build::Avx512Vl if fuse => unsafe {
-                        self.emit_sum_integrate_avx512vl(scratch, params, y, positions, row)
-                    },
-                    _ => {
-                        self.sum_row(scratch, params, r);
-                        0
+                    unsafe {
+                        fused_pass(fused.0, self, scratch, params, y, positions, row)
                     }
+                    #[cfg(not(target_arch = "x86_64"))]
+                    unreachable!("`fuse` is never set off x86-64")
+                } else {
+                    self.sum_row(scratch, params, r);
+                    0
                 };
-                integrate_row(&scratch.total, params, positions, pinned, row, done);
+                let total = &scratch.total;
+                integrate_row(total, stride, params, positions, pinned, row, done);
             }
         }
     }
@@ -357,7 +423,7 @@ impl Stencil {
     /// Copies row `y` of `positions` into the struct-of-arrays ring.
     #[inline(always)]
     fn load_row(&self, scratch: &mut RowScratch, positions: &[Vec3], y: usize) {
-        let stride = self.nw + 2 * PAD;
+        let stride = scratch.stride;
         let base = (y % 3) * 3 * stride + PAD;
         let row = &positions[y * self.nw..(y + 1) * self.nw];
         for c in 0..3 {
@@ -371,7 +437,7 @@ impl Stencil {
     /// The force of every spring emitted by row `y`, per direction, into the force ring.
     #[inline(always)]
     fn emit_row(&self, scratch: &mut RowScratch, params: &SweepParams, y: usize) {
-        let (nw, stride) = (self.nw, self.nw + 2 * PAD);
+        let (nw, stride) = (self.nw, scratch.stride);
         for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
             let out = ((y % 3) * 6 + t) * 3 * stride;
             let out = &mut scratch.f[out..out + 3 * stride];
@@ -403,7 +469,7 @@ impl Stencil {
     /// The total force on each point of row `r`, summed in the course's order (module docs).
     #[inline(always)]
     fn sum_row(&self, scratch: &mut RowScratch, params: &SweepParams, r: usize) {
-        let (nw, stride) = (self.nw, self.nw + 2 * PAD);
+        let (nw, stride) = (self.nw, scratch.stride);
         let f = &scratch.f;
         let zeros = &scratch.zeros[..nw];
         // Direction t, component c of emitter row `row`, starting `shift` columns to the right
@@ -419,7 +485,7 @@ impl Stencil {
             &f[start.wrapping_add_signed(shift)..][..nw]
         };
         for c in 0..3 {
-            let total = &mut scratch.total[c * nw..(c + 1) * nw];
+            let total = &mut scratch.total[c * stride..][..nw];
             // NOTE: each slice cut to `nw` here, so the compiler drops the loop's bounds tests.
             let cut = |row: usize, t: usize, shift: isize| &term(row, t, c, shift)[..nw];
             let (o0, o1, o2) = (cut(r, 0, 0), cut(r, 1, 0), cut(r, 2, 0));
@@ -481,11 +547,13 @@ fn spring_forces(k: f64, a: [&[f64]; 3], b: [&[f64]; 3], rest: &[f64], f: [&mut 
 }
 
 /// Damped Verlet for one row: `x' = x + keep (x - x_last) + F dt^2 / m`, written over the last
-/// positions in `next`; pinned points keep their position. Columns before `from` are skipped,
-/// except that pinned ones are set again (the fused pass integrates them like any other).
+/// positions in `next`, with the forces' components at `total[c * stride..]`; pinned points keep
+/// their position. Columns before `from` are skipped, except that pinned ones are set again (the
+/// fused pass integrates them like any other).
 #[inline(always)]
 fn integrate_row(
     total: &[f64],
+    stride: usize,
     params: &SweepParams,
     positions: &[Vec3],
     pinned: &[bool],
@@ -493,7 +561,12 @@ fn integrate_row(
     from: usize,
 ) {
     let nw = positions.len();
-    let (fx, fy, fz) = (&total[..nw], &total[nw..2 * nw], &total[2 * nw..3 * nw]);
+    // NOTE: plain slices, not `array::map` (see `sum_row`).
+    let (fx, fy, fz) = (
+        &total[..nw],
+        &total[stride..][..nw],
+        &total[2 * stride..][..nw],
+    );
     let done = from.min(nw);
     for ((p, l), &pin) in positions[..done]
         .iter()
@@ -623,6 +696,25 @@ mod tests {
         assert_dispatch_matches_portable(21, 17, 5..11);
         assert_dispatch_matches_portable(21, 17, 1..2);
         assert_dispatch_matches_portable(21, 17, 14..17);
+    }
+
+    #[test]
+    fn every_ring_stride_keeps_the_portable_bits() {
+        // The fused pass is compiled once per ring stride: the narrowest and the widest rows
+        // of each class, and rows wider than the last class (the build with the stride a
+        // variable), each against the portable sweep.
+        let mut narrowest = 4;
+        for &stride in RING_STRIDES {
+            let widest = stride - 2 * PAD;
+            assert_eq!(ring_stride(narrowest), stride);
+            assert_eq!(ring_stride(widest), stride);
+            assert_dispatch_matches_portable(narrowest, 5, 0..5);
+            assert_dispatch_matches_portable(widest, 5, 0..5);
+            narrowest = widest + 1;
+        }
+        assert_eq!(ring_stride(narrowest), narrowest + 2 * PAD);
+        assert_dispatch_matches_portable(narrowest, 5, 0..5);
+        assert_dispatch_matches_portable(narrowest + 3, 5, 0..5);
     }
 
     #[test]

@@ -53,7 +53,7 @@ macro_rules! fused_pass {
         impl Stencil {
             $(#[$doc])*
             #[target_feature(enable = $features)]
-            pub(super) fn $name(
+            pub(super) fn $name<const STRIDE: usize>(
                 &self,
                 scratch: &mut RowScratch,
                 params: &SweepParams,
@@ -61,7 +61,11 @@ macro_rules! fused_pass {
                 positions: &[Vec3],
                 next: &mut [Vec3],
             ) -> usize {
-                let (nw, stride) = (self.nw, self.nw + 2 * PAD);
+                // The rings' row stride: `STRIDE`, a constant (see `ring_strides!`), or when 0
+                // the scratch's.
+                let nw = self.nw;
+                let stride = if STRIDE == 0 { scratch.stride } else { STRIDE };
+                assert_eq!(stride, scratch.stride, "the build for the scratch's stride");
                 // Every stream below is a checked slice of exactly `nw` values; the loop reads and
                 // writes lanes `j..j + 4` of them with `j + 4 <= nw`.
                 let ring = &scratch.pos[..];
@@ -121,7 +125,7 @@ macro_rules! fused_pass {
                     }
                 }
                 let mut total = [std::ptr::null_mut::<f64>(); 3];
-                for (total, row) in total.iter_mut().zip(scratch.total.chunks_exact_mut(nw)) {
+                for (total, row) in total.iter_mut().zip(scratch.total.chunks_exact_mut(stride)) {
                     *total = row[..nw].as_mut_ptr();
                 }
                 // `own` holds 18 rows and `scratch.total` three, so every pointer is set; checked,
