@@ -66,29 +66,29 @@ macro_rules! fused_pass {
                 let nw = self.nw;
                 let stride = if STRIDE == 0 { scratch.stride } else { STRIDE };
                 assert_eq!(stride, scratch.stride, "the build for the scratch's stride");
-                // Every stream below is a checked slice of exactly `nw` values; the loop reads and
-                // writes lanes `j..j + 4` of them with `j + 4 <= nw`.
+                // NOTE: the rings are read through one pointer per slot (three rows of
+                // positions, two of forces), at a fixed offset per stream once `stride` is a
+                // constant: a pointer per stream (about 80) spilled to the stack and was
+                // reloaded at every use.
+                // Every ring access below is `slot + (k * stride + PAD + shift + j)` for a row
+                // `k` of the slot, a shift in `-PAD..=PAD` and lanes `j..j + 4` with
+                // `j + 4 <= nw`: inside row `k`, as `stride >= nw + 2 PAD` (checked here).
+                assert!(stride >= nw + 2 * PAD, "rows fit their stride");
                 let ring = &scratch.pos[..];
-                let pos = |q: usize, c: usize| ((q % 3) * 3 + c) * stride + PAD;
-                let mut a = [std::ptr::null::<f64>(); 3];
-                let mut b = [[std::ptr::null::<f64>(); 3]; 6];
+                // The position ring's slots of rows y, y - 1 and y - 2 (`-dy`), three rows
+                // (`x`, `y`, `z`) each, checked.
+                let slot = |q: usize| ring[(q % 3) * 3 * stride..][..3 * stride].as_ptr();
+                let p = [slot(y), slot(y - 1), slot(y - 2)];
                 let mut rest = [std::ptr::null::<f64>(); 6];
                 // Per direction, its valid columns `lo..hi` as `lo - 1` and `hi`, for lane
                 // compares.
                 let mut above = [_mm256_set1_epi64x(0); 6];
                 let mut below = [_mm256_set1_epi64x(0); 6];
-                for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
-                    let q = y.wrapping_add_signed(dy);
-                    for (c, b) in b[t].iter_mut().enumerate() {
-                        *b = stream(ring, pos(q, c), dx, nw).as_ptr();
-                    }
+                for (t, &(dx, _, _)) in DIRECTIONS.iter().enumerate() {
                     rest[t] = stream(&self.rest[t], y * nw, 0, nw).as_ptr();
                     let cols = valid_columns(nw, dx);
                     above[t] = _mm256_set1_epi64x(cols.start as i64 - 1);
                     below[t] = _mm256_set1_epi64x(cols.end as i64);
-                }
-                for (c, a) in a.iter_mut().enumerate() {
-                    *a = stream(ring, pos(y, c), 0, nw).as_ptr();
                 }
 
                 // The force ring's three row slots: row y's is written; rows r = y - 2 and r + 1
@@ -101,22 +101,9 @@ macro_rules! fused_pass {
                     1 => (s1, &*s0, &*s2),
                     _ => (s2, &*s1, &*s0),
                 };
+                // Row `t * 3 + c` of a force slot: direction `t`, component `c`.
                 let term = |t: usize, c: usize| (t * 3 + c) * stride + PAD;
-                let mut terms = [[std::ptr::null::<f64>(); 6]; 3];
-                let mut far = [[std::ptr::null::<f64>(); 5]; 3];
-                for c in 0..3 {
-                    for (t, term_t) in terms[c].iter_mut().enumerate() {
-                        *term_t = stream(fr, term(t, c), 0, nw).as_ptr();
-                    }
-                    // The springs row r is the far end of, in the sum's order (see `sum_row`).
-                    far[c] = [
-                        stream(fr, term(0, c), 1, nw).as_ptr(),
-                        stream(fr, term(4, c), 2, nw).as_ptr(),
-                        stream(fr1, term(3, c), -1, nw).as_ptr(),
-                        stream(fr1, term(1, c), 0, nw).as_ptr(),
-                        stream(fr1, term(2, c), 1, nw).as_ptr(),
-                    ];
-                }
+                let (fr, fr1) = (fr.as_ptr(), fr1.as_ptr());
                 let mut out = [std::ptr::null_mut::<f64>(); 18];
                 let mut rows = own.chunks_exact_mut(stride);
                 for out in &mut out {
@@ -159,21 +146,27 @@ macro_rules! fused_pass {
                     let integrate = j == i;
                     i += 4;
                     let column = _mm256_add_epi64(_mm256_set1_epi64x(j as i64), lane);
-                    // SAFETY (every load and store below): each pointer is the start of a stream of
-                    // `nw` values (checked slices above), and `j + 4 <= nw`. The written streams
+                    // SAFETY (every load and store below): each stream pointer starts `nw` values
+                    // (checked slices above) and `j + 4 <= nw`; each ring access is inside its
+                    // slot (checked slices) and its row (`stride >= nw + 2 PAD`, see above),
+                    // and force slots are 18 rows (`block`). The written streams
                     // (row y's slot of the force ring, the totals) are disjoint from each other and
                     // from every stream read after them: the ring's slots are split apart.
                     unsafe {
-                        let av = [0, 1, 2].map(|c| _mm256_loadu_pd(a[c].add(j)));
+                        let av = [0, 1, 2].map(|c| _mm256_loadu_pd(p[0].add(c * stride + PAD + j)));
                         // NOTE: the six square roots first, then the six divisions: each division
                         // waits about 20 cycles for its root, and with the roots issued together
                         // the divider has the next one queued meanwhile (measured: 0.93 x the
                         // separate loops' time where root-then-division per direction gave 0.97 x).
                         let mut dirs = [[zero; 3]; 6];
                         let mut lens = [zero; 6];
-                        for t in 0..6 {
-                            let d = [0, 1, 2]
-                                .map(|c| _mm256_sub_pd(_mm256_loadu_pd(b[t][c].add(j)), av[c]));
+                        for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
+                            // Row `y + dy`, shifted by `dx`.
+                            let row = p[dy.unsigned_abs()];
+                            let d = [0, 1, 2].map(|c| {
+                                let at = row.add(c * stride + j).offset(PAD as isize + dx);
+                                _mm256_sub_pd(_mm256_loadu_pd(at), av[c])
+                            });
                             let len2 = _mm256_add_pd(
                                 _mm256_add_pd(_mm256_mul_pd(d[0], d[0]), _mm256_mul_pd(d[1], d[1])),
                                 _mm256_mul_pd(d[2], d[2]),
@@ -203,11 +196,21 @@ macro_rules! fused_pass {
                         let mut sums = [zero; 3];
                         for c in 0..3 {
                             let mut sum = weight[c];
-                            for term in terms[c] {
-                                sum = _mm256_add_pd(sum, _mm256_loadu_pd(term.add(j)));
+                            for t in 0..6 {
+                                sum = _mm256_add_pd(sum, _mm256_loadu_pd(fr.add(term(t, c) + j)));
                             }
-                            for term in far[c] {
-                                sum = _mm256_sub_pd(sum, _mm256_loadu_pd(term.add(j)));
+                            // The springs row r is the far end of, in the sum's order (see
+                            // `sum_row`): `(slot, row, shift)`.
+                            let far = [
+                                (fr, term(0, c), 1),
+                                (fr, term(4, c), 2),
+                                (fr1, term(3, c), -1),
+                                (fr1, term(1, c), 0),
+                                (fr1, term(2, c), 1),
+                            ];
+                            for (slot, row, shift) in far {
+                                let at = slot.add(row + j).offset(shift);
+                                sum = _mm256_sub_pd(sum, _mm256_loadu_pd(at));
                             }
                             sum = _mm256_sub_pd(sum, last[c]);
                             _mm256_storeu_pd(total[c].add(j), sum);
