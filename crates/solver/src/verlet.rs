@@ -339,13 +339,51 @@ fn both_finite(a: &[Vec3], b: &[Vec3], pool: Option<&rayon::ThreadPool>) -> bool
     }
 }
 
-/// Whether every coordinate is finite, without early exit so it vectorises: `v * 0` is 0 for a
-/// finite `v` and NaN for a NaN or an infinity.
+/// Whether every coordinate is finite.
 fn all_finite(points: &[Vec3]) -> bool {
-    points.iter().fold(true, |ok, p| {
+    // NOTE: over the coordinates as one flat run of f64s, not point by point, and on AVX2 where
+    // the CPU has it: the loop is then a subtraction, a compare and an `and` per four values,
+    // with no shuffles to gather each point's `x y z` (point by point on SSE2 the check was 5 %
+    // of a `pinned4` step).
+    const { assert!(size_of::<Vec3>() == 3 * size_of::<f64>()) };
+    // SAFETY: a `Vec3` is nalgebra's `repr(C)` matrix over a `repr(transparent)` array storage,
+    // `[[f64; 3]; 1]`: three contiguous f64s with no padding (size checked above), so `n` of
+    // them are `3 n` f64s, borrowed for as long as `points`.
+    #[allow(unsafe_code)]
+    let coordinates: &[f64] =
+        unsafe { std::slice::from_raw_parts(points.as_ptr().cast(), 3 * points.len()) };
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        #[allow(unsafe_code)]
+        return unsafe { all_finite_avx2(coordinates) };
+    }
+    finite_run(coordinates)
+}
+
+/// [`finite_run`] compiled for AVX2.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx2")]
+unsafe fn all_finite_avx2(values: &[f64]) -> bool {
+    finite_run(values)
+}
+
+/// Whether every value is finite, without early exit so it vectorises: `v - v` is 0 for a
+/// finite `v` and NaN for a NaN or an infinity.
+#[inline(always)]
+#[allow(clippy::inline_always)]
+fn finite_run(values: &[f64]) -> bool {
+    let mut ok = true;
+    // NOTE: a plain loop, not a fold: a closure would not be inlined into the AVX2 build.
+    for &v in values {
         // NOTE: `&`, not `&&`: no early exit, so the loop vectorises.
-        #[allow(clippy::needless_bitwise_bool)]
-        let ok = ok & (p.x * 0.0 + p.y * 0.0 + p.z * 0.0 == 0.0);
-        ok
-    })
+        #[allow(clippy::eq_op)]
+        let finite = v - v == 0.0;
+        ok &= finite;
+    }
+    ok
 }
