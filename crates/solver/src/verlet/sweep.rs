@@ -104,6 +104,10 @@ impl Fused {
 /// up to two columns away without bounds tests.
 const PAD: usize = 2;
 
+/// Rows of positions in the ring: the three a row's springs read, and the next one, which the
+/// fused pass copies in while it emits the row (see `sweep/fused.rs`).
+const POS_SLOTS: usize = 4;
+
 /// Declares the row strides the fused pass is compiled for, and its dispatch by stride.
 ///
 /// NOTE: the fused pass reads and writes about 80 streams, the rows of the rings, and with a
@@ -126,7 +130,7 @@ macro_rules! ring_strides {
         /// # Safety
         /// The CPU must run `build` (see [`Fused`]).
         #[cfg(target_arch = "x86_64")]
-        #[allow(unsafe_code)]
+        #[allow(unsafe_code, clippy::too_many_arguments)]
         unsafe fn fused_pass(
             build: Build,
             stencil: &Stencil,
@@ -134,6 +138,7 @@ macro_rules! ring_strides {
             params: &SweepParams,
             y: usize,
             positions: &[Vec3],
+            ahead: &[Vec3],
             next: &mut [Vec3],
         ) -> usize {
             // SAFETY (every call): the caller's contract.
@@ -141,15 +146,15 @@ macro_rules! ring_strides {
                 match (build, scratch.stride) {
                     $(
                         (Build::Avx2, $stride) => stencil
-                            .emit_sum_integrate_avx2::<$stride>(scratch, params, y, positions, next),
+                            .emit_sum_integrate_avx2::<$stride>(scratch, params, y, positions, ahead, next),
                         (Build::Avx512Vl, $stride) => stencil
-                            .emit_sum_integrate_avx512vl::<$stride>(scratch, params, y, positions, next),
+                            .emit_sum_integrate_avx512vl::<$stride>(scratch, params, y, positions, ahead, next),
                     )+
                     (Build::Avx2, _) => {
-                        stencil.emit_sum_integrate_avx2::<0>(scratch, params, y, positions, next)
+                        stencil.emit_sum_integrate_avx2::<0>(scratch, params, y, positions, ahead, next)
                     }
                     (Build::Avx512Vl, _) => {
-                        stencil.emit_sum_integrate_avx512vl::<0>(scratch, params, y, positions, next)
+                        stencil.emit_sum_integrate_avx512vl::<0>(scratch, params, y, positions, ahead, next)
                     }
                     (Build::Off, _) => unreachable!("no fused pass is run without a build"),
                 }
@@ -204,7 +209,8 @@ pub(crate) struct SweepParams {
 /// summed forces), grown once.
 #[derive(Debug, Default, Clone)]
 pub(crate) struct RowScratch {
-    /// `pos[((row % 3) * 3 + c) * stride + PAD + x]`, `stride` being [`RowScratch::stride`].
+    /// `pos[((row % POS_SLOTS) * 3 + c) * stride + PAD + x]`, `stride` being
+    /// [`RowScratch::stride`].
     pos: Vec<f64>,
     /// `f[(((row % 3) * 6 + t) * 3 + c) * stride + PAD + x]`.
     f: Vec<f64>,
@@ -362,7 +368,7 @@ impl Stencil {
     ) {
         let (nw, nh) = (self.nw, self.nh);
         let stride = ring_stride(nw);
-        scratch.pos.resize(3 * 3 * stride, 0.0);
+        scratch.pos.resize(POS_SLOTS * 3 * stride, 0.0);
         if scratch.stride != stride {
             // NOTE: zeroed once per layout. Spring forces are only ever written to a
             // direction's valid columns (or a whole row of zeros), so the columns outside them
@@ -377,12 +383,16 @@ impl Stencil {
         for y in r0.saturating_sub(2)..r0 {
             self.load_row(scratch, positions, y);
         }
+        // Whether the last fused pass copied row `y` into the ring already.
+        let mut loaded = false;
         for y in r0..(r1 + 2) {
             // Rows before `r0 + 2` have no row of this band to sum; past the last row there is
             // nothing to emit.
             let fuse = fused != Fused::OFF && y >= r0 + 2 && self.fusable(params, y);
             if y < nh {
-                self.load_row(scratch, positions, y);
+                if !loaded {
+                    self.load_row(scratch, positions, y);
+                }
                 if !fuse {
                     self.emit_row(scratch, params, y);
                 }
@@ -390,15 +400,23 @@ impl Stencil {
             if y >= r0 + 2 {
                 let r = y - 2;
                 let row = &mut next[(r - r0) * nw..(r - r0 + 1) * nw];
+                let positions_all = positions;
                 let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
                 // Columns already integrated by the fused pass (`fuse` is never set off
                 // x86-64, see `Fused`).
+                // The fused pass copies row `y + 1` into the ring, if there is one.
+                let ahead = if y + 1 < nh {
+                    &positions_all[(y + 1) * nw..][..nw]
+                } else {
+                    &[]
+                };
+                loaded = fuse && !ahead.is_empty();
                 let done = if fuse {
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: a `Fused` of a build is only made on CPUs that run it.
                     #[allow(unsafe_code)]
                     unsafe {
-                        fused_pass(fused.0, self, scratch, params, y, positions, row)
+                        fused_pass(fused.0, self, scratch, params, y, positions, ahead, row)
                     }
                     #[cfg(not(target_arch = "x86_64"))]
                     unreachable!("`fuse` is never set off x86-64")
@@ -432,7 +450,7 @@ impl Stencil {
     #[inline(always)]
     fn load_row(&self, scratch: &mut RowScratch, positions: &[Vec3], y: usize) {
         let stride = scratch.stride;
-        let base = (y % 3) * 3 * stride + PAD;
+        let base = (y % POS_SLOTS) * 3 * stride + PAD;
         let row = &positions[y * self.nw..(y + 1) * self.nw];
         for c in 0..3 {
             let dst = &mut scratch.pos[base + c * stride..base + c * stride + self.nw];
@@ -457,8 +475,8 @@ impl Stencil {
             }
             let (fx, rest_f) = out.split_at_mut(stride);
             let (fy, fz) = rest_f.split_at_mut(stride);
-            let a = (y % 3) * 3 * stride + PAD;
-            let b = (partner_row as usize % 3) * 3 * stride + PAD;
+            let a = (y % POS_SLOTS) * 3 * stride + PAD;
+            let b = (partner_row as usize % POS_SLOTS) * 3 * stride + PAD;
             let b = (b as isize + dx) as usize;
             let pos = &scratch.pos;
             let row = |base: usize, c: usize| &pos[base + c * stride + cols.start..][..cols.len()];

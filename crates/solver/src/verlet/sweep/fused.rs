@@ -28,13 +28,13 @@ use std::arch::x86_64::{
     __m256i, _CMP_EQ_OQ, _mm256_add_epi64, _mm256_add_pd, _mm256_and_pd, _mm256_and_si256,
     _mm256_andnot_pd, _mm256_blend_pd, _mm256_castsi256_pd, _mm256_cmp_pd, _mm256_cmpgt_epi64,
     _mm256_div_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_permute2f128_pd, _mm256_set_epi64x,
-    _mm256_set1_epi64x, _mm256_set1_pd, _mm256_setzero_pd, _mm256_sqrt_pd, _mm256_storeu_pd,
-    _mm256_sub_pd, _mm256_unpackhi_pd, _mm256_unpacklo_pd,
+    _mm256_set1_epi64x, _mm256_set1_pd, _mm256_setzero_pd, _mm256_shuffle_pd, _mm256_sqrt_pd,
+    _mm256_storeu_pd, _mm256_sub_pd, _mm256_unpackhi_pd, _mm256_unpacklo_pd,
 };
 
 use cloth_mesh::Vec3;
 
-use super::{DIRECTIONS, PAD, RowScratch, Stencil, SweepParams, valid_columns};
+use super::{DIRECTIONS, PAD, POS_SLOTS, RowScratch, Stencil, SweepParams, valid_columns};
 
 /// `len` values of `s` from `start + shift`: a stream the loop reads four lanes at a time.
 #[inline(always)]
@@ -59,6 +59,7 @@ macro_rules! fused_pass {
                 params: &SweepParams,
                 y: usize,
                 positions: &[Vec3],
+                ahead: &[Vec3],
                 next: &mut [Vec3],
             ) -> usize {
                 // The rings' row stride: `STRIDE`, a constant (see `ring_strides!`), or when 0
@@ -74,11 +75,13 @@ macro_rules! fused_pass {
                 // `k` of the slot, a shift in `-PAD..=PAD` and lanes `j..j + 4` with
                 // `j + 4 <= nw`: inside row `k`, as `stride >= nw + 2 PAD` (checked here).
                 assert!(stride >= nw + 2 * PAD, "rows fit their stride");
-                let ring = &scratch.pos[..];
-                // The position ring's slots of rows y, y - 1 and y - 2 (`-dy`), three rows
-                // (`x`, `y`, `z`) each, checked.
-                let slot = |q: usize| ring[(q % 3) * 3 * stride..][..3 * stride].as_ptr();
-                let p = [slot(y), slot(y - 1), slot(y - 2)];
+                // The position ring, checked, and its slots of rows y, y - 1 and y - 2 (`-dy`)
+                // and y + 1 (written), three rows (`x`, `y`, `z`) each: four distinct slots.
+                let ring = scratch.pos[..POS_SLOTS * 3 * stride].as_mut_ptr();
+                // SAFETY: slot `q % POS_SLOTS` starts inside the ring and holds `3 stride` values.
+                let slot = |q: usize| unsafe { ring.add((q % POS_SLOTS) * 3 * stride) };
+                let p = [slot(y), slot(y - 1), slot(y - 2)].map(<*mut f64>::cast_const);
+                let written = slot(y + 1);
                 let mut rest = [std::ptr::null::<f64>(); 6];
                 // Per direction, its valid columns `lo..hi` as `lo - 1` and `hi`, for lane
                 // compares.
@@ -132,6 +135,14 @@ macro_rules! fused_pass {
                 // life.
                 let l_flat: &mut [f64] =
                     unsafe { std::slice::from_raw_parts_mut(next_row.as_mut_ptr().cast(), 3 * nw) };
+                // Row y + 1, which the loop copies into its ring slot as it goes, or none.
+                let ahead_flat: Option<&[f64]> = match ahead.len() {
+                    0 => None,
+                    // SAFETY: as above.
+                    _ => Some(unsafe {
+                        std::slice::from_raw_parts(ahead[..nw].as_ptr().cast(), 3 * nw)
+                    }),
+                };
                 let keep = _mm256_set1_pd(params.keep);
                 let scale = _mm256_set1_pd(params.scale);
                 let k = params.k.map(|k| _mm256_set1_pd(k));
@@ -153,6 +164,26 @@ macro_rules! fused_pass {
                     // (row y's slot of the force ring, the totals) are disjoint from each other and
                     // from every stream read after them: the ring's slots are split apart.
                     unsafe {
+                        if let Some(ahead) = ahead_flat {
+                            // NOTE: row y + 1's copy into the ring, four points' `x y z | x y z
+                            // ...` split into `x`, `y` and `z` by register shuffles, is done here,
+                            // in the divider's shadow, rather than in a loop of its own before
+                            // the row (measured: 3 % of a `pinned4` step). Its slot is none of
+                            // the three this pass reads.
+                            let m = [0, 4, 8].map(|q| _mm256_loadu_pd(ahead[3 * j + q..][..4].as_ptr()));
+                            let xy_even = _mm256_blend_pd::<0b1100>(m[0], m[1]);
+                            let yz = _mm256_blend_pd::<0b1100>(m[1], m[2]);
+                            let zx = _mm256_permute2f128_pd::<0x21>(m[0], m[2]);
+                            let xy_odd = _mm256_shuffle_pd::<0b0101>(zx, yz);
+                            let split = [
+                                _mm256_unpacklo_pd(xy_even, xy_odd),
+                                _mm256_unpackhi_pd(xy_even, xy_odd),
+                                _mm256_blend_pd::<0b1010>(zx, yz),
+                            ];
+                            for (c, v) in split.into_iter().enumerate() {
+                                _mm256_storeu_pd(written.add(c * stride + PAD + j), v);
+                            }
+                        }
                         let av = [0, 1, 2].map(|c| _mm256_loadu_pd(p[0].add(c * stride + PAD + j)));
                         // NOTE: the six square roots first, then the six divisions: each division
                         // waits about 20 cycles for its root, and with the roots issued together
