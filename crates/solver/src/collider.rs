@@ -124,6 +124,31 @@ mod tests {
     }
 
     #[test]
+    fn a_non_finite_point_stays_non_finite() {
+        // The Verlet solver's finiteness check leans on this: no collision makes a NaN or an
+        // infinite position finite again, whatever the friction.
+        let last = Vec3::new(0.0, 0.01, 0.0);
+        for friction in [0.0, 0.5, 1.0] {
+            let ball = Collider::Sphere(Sphere {
+                origin: Vec3::zeros(),
+                radius: 0.1,
+                friction,
+            });
+            for collider in [floor(friction), ball] {
+                for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                    for axis in 0..3 {
+                        let mut p = Vec3::new(0.01, -0.02, 0.0);
+                        p[axis] = bad;
+                        if let Some(q) = collider.resolve(last, p) {
+                            assert!(!q.iter().all(|c| c.is_finite()), "{collider:?} {p:?} {q:?}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn a_point_crossing_the_plane_lands_just_above_it() {
         let q = floor(0.0)
             .resolve(Vec3::new(0.0, 0.01, 0.0), Vec3::new(0.1, -0.02, 0.0))
