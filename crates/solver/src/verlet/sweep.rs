@@ -400,17 +400,16 @@ impl Stencil {
             if y >= r0 + 2 {
                 let r = y - 2;
                 let row = &mut next[(r - r0) * nw..(r - r0 + 1) * nw];
-                let positions_all = positions;
-                let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
-                // Columns already integrated by the fused pass (`fuse` is never set off
-                // x86-64, see `Fused`).
                 // The fused pass copies row `y + 1` into the ring, if there is one.
                 let ahead = if y + 1 < nh {
-                    &positions_all[(y + 1) * nw..][..nw]
+                    &positions[(y + 1) * nw..][..nw]
                 } else {
                     &[]
                 };
                 loaded = fuse && !ahead.is_empty();
+                let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
+                // Columns already integrated by the fused pass (`fuse` is never set off
+                // x86-64, see `Fused`).
                 let done = if fuse {
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: a `Fused` of a build is only made on CPUs that run it.
