@@ -6,6 +6,15 @@ use crate::{SplitMix64, Vec3};
 /// interactively; past it a typo such as `num_width_points: 50000` would exhaust memory.
 pub const MAX_POINTS: usize = 1 << 22;
 
+/// The widths, heights and thicknesses a cloth may have, in metres: from a nanometre to a
+/// million kilometres, far beyond any cloth either way.
+///
+/// NOTE: the bound also keeps the solver's shortcuts exact. Its stretch check proves a spring
+/// inside the limit from `len^2 <= max^2 (1 - 4 eps)` without a square root, which holds only
+/// while `max^2` is a normal double (spring limits from about 1.5e-154 m to 1.3e154 m); with at
+/// most [`MAX_POINTS`] points, spring lengths stay within 1e-16 m to 1e10 m here.
+pub const EXTENT_RANGE: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
+
 /// How the cloth starts out.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Orientation {
@@ -76,8 +85,8 @@ pub enum MeshError {
         /// Their product (saturating).
         points: usize,
     },
-    /// A size that is not a positive finite number.
-    #[error("{field} is {value}, but it must be a finite number greater than 0")]
+    /// A size that is not a finite number in [`EXTENT_RANGE`].
+    #[error("{field} is {value} m, but it must be a finite number from 1e-9 to 1e9 (metres)")]
     BadExtent {
         /// `width`, `height` or `thickness`.
         field: &'static str,
@@ -167,7 +176,7 @@ impl ClothMesh {
             ("height", spec.height),
             ("thickness", spec.thickness),
         ] {
-            if !(value.is_finite() && value > 0.0) {
+            if !EXTENT_RANGE.contains(&value) {
                 return Err(MeshError::BadExtent { field, value });
             }
         }
@@ -454,6 +463,34 @@ mod tests {
                 ..
             }
         ));
+        // Past either end of the range, and just inside it.
+        for width in [0.0, -1.0, 1e-10, 2e9, f64::INFINITY] {
+            let e = bad(GridSpec {
+                width,
+                ..GridSpec::default()
+            });
+            assert!(
+                matches!(e, MeshError::BadExtent { field: "width", .. }),
+                "{width}"
+            );
+        }
+        assert_eq!(
+            bad(GridSpec {
+                height: 1e-12,
+                ..GridSpec::default()
+            })
+            .to_string(),
+            "height is 0.000000000001 m, but it must be a finite number from 1e-9 to 1e9 (metres)"
+        );
+        for size in [1e-9, 1e9] {
+            let spec = GridSpec {
+                width: size,
+                height: size,
+                thickness: size,
+                ..GridSpec::default()
+            };
+            assert!(ClothMesh::new(&spec).is_ok(), "{size}");
+        }
         let e = bad(GridSpec {
             pinned: vec![(50, 0)],
             ..GridSpec::default()

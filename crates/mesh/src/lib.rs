@@ -12,7 +12,9 @@ mod normals;
 mod rng;
 mod state;
 
-pub use grid::{ClothMesh, GridSpec, MAX_POINTS, MeshError, Orientation, Spring, SpringKind};
+pub use grid::{
+    ClothMesh, EXTENT_RANGE, GridSpec, MAX_POINTS, MeshError, Orientation, Spring, SpringKind,
+};
 pub use normals::vertex_normals;
 pub use rng::SplitMix64;
 pub use state::ClothState;

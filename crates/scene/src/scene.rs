@@ -202,24 +202,26 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
     let ck = Check { origin };
     let c = &file.cloth;
     let positive = |v: f64| v > 0.0;
+    // The mesh's own bounds, checked here so the error names the scene's key.
+    let extent = |v: f64| cloth_mesh::EXTENT_RANGE.contains(&v);
     let unit = |v: f64| (0.0..=1.0).contains(&v);
     ck.range(
         "cloth.width",
         c.width,
-        positive,
-        "a finite number > 0 (metres)",
+        extent,
+        "a finite number from 1e-9 to 1e9 (metres)",
     )?;
     ck.range(
         "cloth.height",
         c.height,
-        positive,
-        "a finite number > 0 (metres)",
+        extent,
+        "a finite number from 1e-9 to 1e9 (metres)",
     )?;
     ck.range(
         "cloth.thickness",
         c.thickness,
-        positive,
-        "a finite number > 0 (metres)",
+        extent,
+        "a finite number from 1e-9 to 1e9 (metres)",
     )?;
     ck.range("cloth.ks", c.ks, |v| v >= 0.0, "a finite number >= 0 (N/m)")?;
     ck.range(

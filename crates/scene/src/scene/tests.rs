@@ -156,6 +156,11 @@ fn physical_values_out_of_range_are_rejected() {
         ("cloth.damping=-0.1", "cloth.damping is -0.1"),
         ("cloth.width=0", "cloth.width is 0"),
         (
+            "cloth.width=1e-12",
+            "cloth.width is 0.000000000001, but it must be a finite number from 1e-9 to 1e9 (metres)",
+        ),
+        ("cloth.height=2e9", "cloth.height is 2000000000"),
+        (
             "simulation.simulation_steps=0",
             "simulation.simulation_steps is 0",
         ),
