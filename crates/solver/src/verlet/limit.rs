@@ -47,6 +47,18 @@ pub(crate) struct StretchSweep {
     scratch: Vec<BandScratch>,
 }
 
+/// Which build of the pre-pass's row function (`prepass.rs`) its rows take.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+enum RowBuild {
+    /// The portable rows (`marks_row`).
+    Portable,
+    /// `prepass::marks_row_avx2`.
+    Avx2,
+    /// `prepass::marks_row_avx512vl`: the same operations with 32 vector registers.
+    Avx512Vl,
+}
+
 /// What every band reads.
 #[derive(Debug, Default, Clone)]
 struct Bounds {
@@ -216,25 +228,32 @@ impl BandScratch {
     ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
+            let vl = std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512vl");
+            let build = if vl {
+                RowBuild::Avx512Vl
+            } else {
+                RowBuild::Avx2
+            };
+            // SAFETY: the CPU supports AVX2, and AVX-512VL for that build, checked just above.
             #[allow(unsafe_code)]
             unsafe {
-                self.prepass_avx2(bounds, stencil, positions, first, rows);
+                self.prepass_avx2(bounds, stencil, positions, first, rows, build);
             }
             return;
         }
-        // SAFETY: no vector rows.
+        // SAFETY: the portable rows.
         #[allow(unsafe_code)]
         unsafe {
-            self.prepass_rows(bounds, stencil, positions, first, rows, false);
+            self.prepass_rows(bounds, stencil, positions, first, rows, RowBuild::Portable);
         }
     }
 
     /// The pre-pass compiled for AVX2: the copy vectorised by the compiler, the rows with
-    /// every partner row in the window by `prepass::marks_row_avx2`.
+    /// every partner row in the window by `build`'s row function.
     ///
     /// # Safety
-    /// The CPU must support AVX2.
+    /// The CPU must support AVX2, and run `build`.
     #[cfg(target_arch = "x86_64")]
     #[allow(unsafe_code)]
     #[target_feature(enable = "avx2")]
@@ -245,17 +264,17 @@ impl BandScratch {
         positions: &[Vec3],
         first: usize,
         rows: Range<usize>,
+        build: RowBuild,
     ) {
-        // SAFETY: the CPU supports AVX2, this function's contract.
-        unsafe { self.prepass_rows(bounds, stencil, positions, first, rows, true) };
+        // SAFETY: this function's contract.
+        unsafe { self.prepass_rows(bounds, stencil, positions, first, rows, build) };
     }
 
-    /// The pre-pass itself, for whatever instruction set the caller was compiled for. With
-    /// `vector_rows`, the rows with every partner row in the window take
-    /// `prepass::marks_row_avx2`.
+    /// The pre-pass itself, for whatever instruction set the caller was compiled for; the rows
+    /// with every partner row in the window take `build`'s row function.
     ///
     /// # Safety
-    /// With `vector_rows`, the CPU must support AVX2.
+    /// The CPU must run `build`.
     #[allow(unsafe_code)]
     #[inline(always)]
     unsafe fn prepass_rows(
@@ -265,25 +284,28 @@ impl BandScratch {
         positions: &[Vec3],
         first: usize,
         rows: Range<usize>,
-        vector_rows: bool,
+        build: RowBuild,
     ) {
         let nw = stencil.nw();
         self.copy_soa(positions);
         for (k, y) in rows.enumerate() {
             let at = Self::margin(nw) + k * nw;
             let out = &mut self.look[at..at + nw];
-            #[cfg(target_arch = "x86_64")]
-            if vector_rows && y >= 2 && nw >= 4 {
-                // SAFETY: with `vector_rows` the CPU supports AVX2 (this function's contract).
-                unsafe {
-                    prepass::marks_row_avx2(&self.soa, &bounds.floor, y * nw - first, out);
-                }
-                continue;
+            let (floor, a0) = (&bounds.floor, y * nw - first);
+            match build {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: the CPU runs `build` (this function's contract).
+                RowBuild::Avx2 if y >= 2 && nw >= 4 => unsafe {
+                    prepass::marks_row_avx2(&self.soa, floor, a0, out);
+                },
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: as above.
+                RowBuild::Avx512Vl if y >= 2 && nw >= 4 => unsafe {
+                    prepass::marks_row_avx512vl(&self.soa, floor, a0, out);
+                },
+                _ => marks_row(&self.soa, bounds, &mut self.row_marks, nw, y, first, out),
             }
-            marks_row(&self.soa, bounds, &mut self.row_marks, nw, y, first, out);
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = vector_rows;
     }
 
     /// The window's positions into the struct-of-arrays copy.
@@ -501,25 +523,24 @@ mod tests {
         stencil: &Stencil,
         positions: &[Vec3],
         rows: Range<usize>,
-    ) -> (Vec<u8>, Vec<u8>) {
+    ) -> (Vec<Vec<u8>>, Vec<u8>) {
         let nw = stencil.nw();
         let sweep = StretchSweep::new(stencil, MAX_STRETCH);
         let first = rows.start.saturating_sub(2) * nw;
         let window = &positions[first..rows.end * nw];
         let emitters = rows.start * nw..rows.end * nw;
         let margin = BandScratch::margin(nw);
-        let run = |portable: bool| {
+        let run = |build: Option<RowBuild>| {
             let mut scratch = BandScratch::default();
             scratch.look.resize(margin + emitters.len() + margin, 0);
             let (bounds, rows) = (&sweep.bounds, rows.clone());
-            if portable {
-                // SAFETY: no vector rows.
+            match build {
+                // SAFETY: the builds passed in are the portable one and those the CPU runs.
                 #[allow(unsafe_code)]
-                unsafe {
-                    scratch.prepass_rows(bounds, stencil, window, first, rows, false);
-                }
-            } else {
-                scratch.prepass(bounds, stencil, window, first, rows);
+                Some(build) => unsafe {
+                    scratch.prepass_rows(bounds, stencil, window, first, rows, build);
+                },
+                None => scratch.prepass(bounds, stencil, window, first, rows),
             }
             let exists = &sweep.bounds.exists[emitters.clone()];
             let marks = &scratch.look[margin..margin + emitters.len()];
@@ -529,7 +550,19 @@ mod tests {
                 .map(|(m, e)| m & e)
                 .collect::<Vec<u8>>()
         };
-        (run(false), run(true))
+        let portable = run(Some(RowBuild::Portable));
+        // The dispatched build, and every build this CPU runs.
+        let mut builds = vec![run(None)];
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            builds.push(run(Some(RowBuild::Avx2)));
+            if std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512vl")
+            {
+                builds.push(run(Some(RowBuild::Avx512Vl)));
+            }
+        }
+        (builds, portable)
     }
 
     #[test]
@@ -560,13 +593,15 @@ mod tests {
                 })
                 .collect();
             positions[mesh.len() / 2].y = f64::NAN;
-            let (dispatched, portable) = both_prepasses(&stencil, &positions, rows);
+            let (builds, portable) = both_prepasses(&stencil, &positions, rows);
             let marked = portable.iter().filter(|&&m| m != 0).count();
             assert!(
                 marked > 0 && marked < portable.len(),
                 "{nw}: the test needs marked and unmarked points"
             );
-            assert_eq!(dispatched, portable, "{nw} wide");
+            for (i, marks) in builds.iter().enumerate() {
+                assert_eq!(*marks, portable, "{nw} wide, build {i}");
+            }
         }
     }
 
