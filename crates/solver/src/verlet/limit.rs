@@ -228,9 +228,7 @@ impl BandScratch {
     ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
-            let vl = std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("avx512vl");
-            let build = if vl {
+            let build = if super::sweep::avx512vl() {
                 RowBuild::Avx512Vl
             } else {
                 RowBuild::Avx2
@@ -556,9 +554,7 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             builds.push(run(Some(RowBuild::Avx2)));
-            if std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("avx512vl")
-            {
+            if super::super::sweep::avx512vl() {
                 builds.push(run(Some(RowBuild::Avx512Vl)));
             }
         }

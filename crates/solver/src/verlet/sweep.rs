@@ -50,6 +50,14 @@ pub(crate) const DIRECTIONS: [(isize, isize, SpringKind); 6] = [
     (0, -2, SpringKind::Bending),
 ];
 
+/// Whether the CPU runs AVX-512VL (with AVX-512F), which the second builds of the 256-bit loops
+/// use for its 32 vector registers (checked once, then a cached flag).
+#[cfg(target_arch = "x86_64")]
+pub(crate) fn avx512vl() -> bool {
+    std::arch::is_x86_feature_detected!("avx512f")
+        && std::arch::is_x86_feature_detected!("avx512vl")
+}
+
 /// Which build of the fused pass (`sweep/fused.rs`) a sweep's rows take, if any.
 ///
 /// NOTE: only [`Fused::detect`] (and, in tests, [`Fused::builds`]) make one other than
@@ -81,9 +89,12 @@ impl Fused {
     pub(crate) fn detect() -> Self {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
-            let vl = std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("avx512vl");
-            return Self(if vl { Build::Avx512Vl } else { Build::Avx2 });
+            let build = if avx512vl() {
+                Build::Avx512Vl
+            } else {
+                Build::Avx2
+            };
+            return Self(build);
         }
         Self::OFF
     }
