@@ -201,7 +201,11 @@ fn threads(c: &mut Criterion) {
     g.measurement_time(Duration::from_secs(5));
     let params = StepParams::default();
     let mesh = pinned_grid(256).unwrap();
-    for order in [ConstraintOrder::Faithful, ConstraintOrder::Parallel] {
+    for order in [
+        ConstraintOrder::Faithful,
+        ConstraintOrder::Parallel,
+        ConstraintOrder::Colored,
+    ] {
         for threads in [1, 2] {
             let solver = Verlet::new()
                 .with_order(order)
@@ -222,6 +226,7 @@ impl BenchMarkName {
         let order = match order {
             ConstraintOrder::Faithful => "faithful",
             ConstraintOrder::Parallel => "parallel",
+            ConstraintOrder::Colored => "colored",
         };
         BenchmarkId::new(format!("256/{order}"), threads)
     }

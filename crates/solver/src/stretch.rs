@@ -20,16 +20,20 @@ pub fn limit_stretch(springs: &[Spring], pinned: &[bool], positions: &mut [Vec3]
 
 /// The course's correction of one spring from `a` to `b`; true when it was over the limit (and
 /// so may have moved its ends).
+///
+/// Generic over how the positions are reached ([`Points`]) so the threaded sweeps use the very
+/// same correction as the sequential ones.
 #[inline]
-pub(crate) fn limit_one(
+pub(crate) fn limit_one<P: Points + ?Sized>(
     a: usize,
     b: usize,
     rest: f64,
     pinned: &[bool],
-    positions: &mut [Vec3],
+    positions: &mut P,
     ratio: f64,
 ) -> bool {
-    let d = positions[b] - positions[a];
+    let (pa, pb) = (positions.at(a), positions.at(b));
+    let d = pb - pa;
     let len2 = dist2(&d);
     let max = ratio * rest;
     // NOTE: most springs are inside the limit; `len2 <= max^2 (1 - 4 eps)` proves it without the
@@ -46,15 +50,34 @@ pub(crate) fn limit_one(
     let excess = d * ((len - max) / len);
     match (pinned[a], pinned[b]) {
         (true, true) => {}
-        (true, false) => positions[b] -= excess,
-        (false, true) => positions[a] += excess,
+        (true, false) => positions.put(b, pb - excess),
+        (false, true) => positions.put(a, pa + excess),
         (false, false) => {
             let half = excess * 0.5;
-            positions[a] += half;
-            positions[b] -= half;
+            positions.put(a, pa + half);
+            positions.put(b, pb - half);
         }
     }
     true
+}
+
+/// Positions that a stretch correction reads and writes by point index.
+pub(crate) trait Points {
+    /// Point `i`'s position.
+    fn at(&self, i: usize) -> Vec3;
+    /// Moves point `i` to `p`.
+    fn put(&mut self, i: usize, p: Vec3);
+}
+
+impl Points for [Vec3] {
+    #[inline]
+    fn at(&self, i: usize) -> Vec3 {
+        self[i]
+    }
+    #[inline]
+    fn put(&mut self, i: usize, p: Vec3) {
+        self[i] = p;
+    }
 }
 
 /// Squared lengths up to this bound are certainly within `max` (see [`limit_one`]).

@@ -74,6 +74,12 @@ fn a_warm_solver_steps_without_allocating() {
         0,
         "parallel, one thread"
     );
+    let mut colored = Verlet::new().with_order(ConstraintOrder::Colored);
+    assert_eq!(
+        allocations_after_warmup(&mut colored, 30, 30),
+        0,
+        "colored, one thread"
+    );
     // NOTE: with threads, the solver's own buffers are just as fixed, but rayon's job injector
     // (crossbeam's) allocates a block for every 63 jobs handed to the pool from outside it, one
     // per step: 14 allocations in these 900 steps. That is the thread pool's, not the step's.

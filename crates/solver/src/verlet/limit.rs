@@ -453,7 +453,14 @@ mod tests {
         for s in mesh.springs() {
             let (a, b) = (s.a as usize, s.b as usize);
             let inside = dist2(&(start[b] - start[a])) <= inside_bound(MAX_STRETCH * s.rest);
-            let corrected = limit_one(a, b, s.rest, mesh.pinned(), &mut positions, MAX_STRETCH);
+            let corrected = limit_one(
+                a,
+                b,
+                s.rest,
+                mesh.pinned(),
+                positions.as_mut_slice(),
+                MAX_STRETCH,
+            );
             if inside && corrected {
                 let off = b as isize - a as isize;
                 let t = offsets.iter().position(|&o| o == off).unwrap();

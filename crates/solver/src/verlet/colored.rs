@@ -1,0 +1,557 @@
+//! The stretch limit in colour classes ([`crate::ConstraintOrder::Colored`]): every spring
+//! checked and corrected once a step with the course's formula, in an order with no chains.
+//!
+//! # Why
+//!
+//! On a big hanging cloth nearly every spring sits at the limit: on the 256 x 256 benchmark
+//! cloth the course's sweep checks 5.7 springs and corrects about 2 per point and step. In the
+//! course's order each correction moves points that the next spring reads, so the sweep is one
+//! long chain of dependent square roots and divisions (some 60-70 cycles a correction), and
+//! that latency, not the work, made it over half of a step. No pre-pass helps: almost nothing
+//! can be proven inside the limit.
+//!
+//! # How
+//!
+//! The springs of one direction split into two classes whose springs share no point:
+//!
+//! | direction | class of the spring emitted by point (x, y) |
+//! |---|---|
+//! | (-1, 0) | x mod 2 |
+//! | (0, -1), (-1, -1), (1, -1) | y mod 2 |
+//! | (-2, 0) | (x / 2) mod 2 |
+//! | (0, -2) | (y / 2) mod 2 |
+//!
+//! Two springs of one direction share a point only when one's emitter is the other's partner,
+//! that is, their emitters differ by the direction itself, which changes the class. The sweep
+//! takes the directions in the course's order and each direction's classes in turn. Inside a
+//! class the corrections are independent: the result is the same in any order (bit for bit),
+//! so the processor overlaps them and threads share them by rows, with results that never
+//! depend on the thread count.
+
+// NOTE: the row loop and its helpers are `#[inline(always)]` so they are compiled into its AVX2
+// build.
+#![allow(clippy::inline_always)]
+
+use rayon::ThreadPool;
+
+use cloth_mesh::Vec3;
+
+use super::sweep::{DIRECTIONS, Stencil, offsets, valid_columns};
+use crate::self_collision::PARALLEL_CHUNK;
+use crate::stretch::{Points, limit_one};
+
+/// One sweep of the stretch limit at `ratio` over `stencil`'s springs, class by class (see the
+/// module), on `pool`'s threads when there is one.
+pub(crate) fn limit_colored(
+    stencil: &Stencil,
+    pinned: &[bool],
+    positions: &mut [Vec3],
+    ratio: f64,
+    pool: Option<&ThreadPool>,
+) {
+    let (nw, nh) = (stencil.nw(), stencil.nh());
+    let offsets = offsets(nw);
+    for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
+        let columns = valid_columns(nw, dx);
+        // Emitting rows: those with a partner row (`dy` is 0 or negative).
+        let rows = dy.unsigned_abs()..nh;
+        for class in 0..2 {
+            let class = Class::of(t, class);
+            let springs = Springs {
+                stencil,
+                t,
+                offset: offsets[t],
+                class,
+                row_columns: class.columns_in(columns.clone()),
+                nw,
+                ratio,
+                pinned,
+            };
+            // SAFETY: the springs of one class touch disjoint points (see the module), and
+            // each row of the class is swept by exactly one task.
+            #[allow(unsafe_code)]
+            let shared = unsafe { Shared::new(positions) };
+            match pool {
+                Some(pool) => pool.install(|| springs.sweep(&shared, rows.clone(), true)),
+                None => springs.sweep(&shared, rows.clone(), false),
+            }
+        }
+    }
+}
+
+/// Which springs of a direction one class holds.
+#[derive(Debug, Clone, Copy)]
+enum Class {
+    /// Emitters in rows `y` with `(y >> shift) & 1 == bit`.
+    Rows { shift: u32, bit: usize },
+    /// Emitters in columns `x` with `(x >> shift) & 1 == bit`.
+    Columns { shift: u32, bit: usize },
+}
+
+impl Class {
+    /// Class `bit` (0 or 1) of direction `t` (an index into `DIRECTIONS`).
+    fn of(t: usize, bit: usize) -> Self {
+        match t {
+            0 => Self::Columns { shift: 0, bit },
+            4 => Self::Columns { shift: 1, bit },
+            5 => Self::Rows { shift: 1, bit },
+            _ => Self::Rows { shift: 0, bit },
+        }
+    }
+
+    fn has_row(self, y: usize) -> bool {
+        match self {
+            Self::Rows { shift, bit } => (y >> shift) & 1 == bit,
+            Self::Columns { .. } => true,
+        }
+    }
+
+    fn has_column(self, x: usize) -> bool {
+        match self {
+            Self::Columns { shift, bit } => (x >> shift) & 1 == bit,
+            Self::Rows { .. } => true,
+        }
+    }
+
+    /// The class's columns among `valid` in a row: the first, and how many; the `i`-th is
+    /// [`Class::column`]`(first, i)`.
+    fn columns_in(self, valid: std::ops::Range<usize>) -> (usize, usize) {
+        let mut columns = valid.filter(|&x| self.has_column(x));
+        let first = columns.next();
+        let count = usize::from(first.is_some()) + columns.count();
+        let first = first.unwrap_or(0);
+        // The pairs of columns of a `shift: 1` class are counted from their first column.
+        debug_assert!(!matches!(self, Self::Columns { shift: 1, .. }) || first % 2 == 0);
+        (first, count)
+    }
+
+    /// The `i`-th of the class's columns in a row, from the first (see [`Class::columns_in`]):
+    /// every column, every other column, or every other pair of columns.
+    #[inline(always)]
+    fn column(self, first: usize, i: usize) -> usize {
+        match self {
+            Self::Rows { .. } => first + i,
+            Self::Columns { shift: 0, .. } => first + 2 * i,
+            Self::Columns { .. } => first + 4 * (i >> 1) + (i & 1),
+        }
+    }
+}
+
+/// The springs of one class.
+struct Springs<'a> {
+    stencil: &'a Stencil,
+    /// Their direction (an index into `DIRECTIONS`), and its partner offset.
+    t: usize,
+    offset: isize,
+    class: Class,
+    /// The first of the class's columns in a row, and how many (see [`Class::columns_in`]).
+    row_columns: (usize, usize),
+    nw: usize,
+    ratio: f64,
+    pinned: &'a [bool],
+}
+
+impl Springs<'_> {
+    /// Checks and corrects the class's springs emitted by `rows`; when `threaded`, halving the
+    /// rows between the current pool's threads down to about [`PARALLEL_CHUNK`] points.
+    /// Recursion rather than a list of chunks, so nothing is allocated.
+    fn sweep(&self, shared: &Shared<'_>, rows: std::ops::Range<usize>, threaded: bool) {
+        if threaded && rows.len() * self.nw > 2 * PARALLEL_CHUNK {
+            let mid = rows.start + rows.len() / 2;
+            rayon::join(
+                || self.sweep(shared, rows.start..mid, true),
+                || self.sweep(shared, mid..rows.end, true),
+            );
+            return;
+        }
+        // SAFETY: this task alone sweeps these rows of the class, whose springs touch points
+        // that no other spring of the class touches (see `limit_colored`).
+        #[allow(unsafe_code)]
+        let mut points = unsafe { shared.view() };
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, checked just above.
+            #[allow(unsafe_code)]
+            unsafe {
+                self.rows_avx2(&mut points, rows);
+            }
+            return;
+        }
+        self.rows_portable(&mut points, rows);
+    }
+
+    /// [`Springs::rows`] compiled for AVX2, with [`limit_lanes_avx2`]: four springs' checks
+    /// and corrections at once, the same operations, so the same corrections.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[allow(unsafe_code)]
+    #[target_feature(enable = "avx2")]
+    unsafe fn rows_avx2(&self, points: &mut View<'_>, rows: std::ops::Range<usize>) {
+        self.rows(points, rows, |a, rest, points| {
+            // SAFETY: this function runs only where the CPU supports AVX2.
+            unsafe { limit_lanes_avx2(a, self.offset, rest, self.pinned, points, self.ratio) }
+        });
+    }
+
+    /// Checks and corrects the class's springs emitted by `rows`, [`LANES`] at a time with
+    /// `lanes` (given the emitters, the direction's rest lengths and the points), the rest one
+    /// by one.
+    #[inline(always)]
+    fn rows<P: Points + ?Sized>(
+        &self,
+        points: &mut P,
+        rows: std::ops::Range<usize>,
+        mut lanes: impl FnMut([usize; LANES], &[f64], &mut P),
+    ) {
+        let rest = self.stencil.rest(self.t);
+        let (first, count) = self.row_columns;
+        let full = count - count % LANES;
+        for y in rows.filter(|&y| self.class.has_row(y)) {
+            let row = y * self.nw;
+            let emitter = |i: usize| row + self.class.column(first, i);
+            for i in (0..full).step_by(LANES) {
+                lanes(
+                    [emitter(i), emitter(i + 1), emitter(i + 2), emitter(i + 3)],
+                    rest,
+                    points,
+                );
+            }
+            for a in (full..count).map(emitter) {
+                let b = a.wrapping_add_signed(self.offset);
+                limit_one(a, b, rest[a], self.pinned, points, self.ratio);
+            }
+        }
+    }
+
+    /// [`Springs::rows`] one spring at a time, for CPUs without AVX2.
+    fn rows_portable(&self, points: &mut View<'_>, rows: std::ops::Range<usize>) {
+        self.rows(points, rows, |a, rest, points| {
+            for a in a {
+                let b = a.wrapping_add_signed(self.offset);
+                limit_one(a, b, rest[a], self.pinned, points, self.ratio);
+            }
+        });
+    }
+}
+
+/// Springs checked at once: four f64 lanes of AVX2.
+const LANES: usize = 4;
+
+/// [`limit_one`] on the springs emitted by `a` (whose partners are at `offset` from them),
+/// which share no point: the four checks at once, and when any spring is over the limit, the
+/// four square roots and divisions at once; then the ends of the springs over the limit move.
+///
+/// NOTE: every lane keeps the course's operations and their order (`d = b - a`, the squared
+/// length summed x, y, z, the bound of `inside_bound`, `(len - max) / len`, halves by `* 0.5`),
+/// with correctly rounded packed square roots and divisions, so each spring gets exactly
+/// `limit_one`'s bits. One at a time, as `limit_one`, the springs cost a branch each: on a big
+/// hanging cloth a third of the checked springs are over the limit, in no pattern a predictor
+/// learns, and each check waited for the one before.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+#[inline(always)]
+unsafe fn limit_lanes_avx2<P: Points + ?Sized>(
+    a: [usize; LANES],
+    offset: isize,
+    rest: &[f64],
+    pinned: &[bool],
+    points: &mut P,
+    ratio: f64,
+) {
+    use std::arch::x86_64::{
+        _CMP_NLE_UQ, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd, _mm256_blendv_pd,
+        _mm256_castsi256_pd, _mm256_cmp_pd, _mm256_div_pd, _mm256_movemask_pd, _mm256_mul_pd,
+        _mm256_or_pd, _mm256_set1_pd, _mm256_setr_epi64x, _mm256_setr_pd, _mm256_sqrt_pd,
+        _mm256_storeu_pd, _mm256_sub_pd,
+    };
+    let b = a.map(|a| a.wrapping_add_signed(offset));
+    // NOTE: the ends as scalars straight into lanes; arrays of points on the stack, read back
+    // as whole vectors, stalled on store forwarding.
+    let (a0, a1, a2, a3) = (
+        points.at(a[0]),
+        points.at(a[1]),
+        points.at(a[2]),
+        points.at(a[3]),
+    );
+    let (b0, b1, b2, b3) = (
+        points.at(b[0]),
+        points.at(b[1]),
+        points.at(b[2]),
+        points.at(b[3]),
+    );
+    // SAFETY (the block): AVX2 is there (the caller's contract); stores go to local arrays.
+    unsafe {
+        // Per coordinate: the `a` ends' and the `b` ends' lanes.
+        let ends = [
+            [
+                _mm256_setr_pd(a0.x, a1.x, a2.x, a3.x),
+                _mm256_setr_pd(b0.x, b1.x, b2.x, b3.x),
+            ],
+            [
+                _mm256_setr_pd(a0.y, a1.y, a2.y, a3.y),
+                _mm256_setr_pd(b0.y, b1.y, b2.y, b3.y),
+            ],
+            [
+                _mm256_setr_pd(a0.z, a1.z, a2.z, a3.z),
+                _mm256_setr_pd(b0.z, b1.z, b2.z, b3.z),
+            ],
+        ];
+        let d = ends.map(|[a, b]| _mm256_sub_pd(b, a));
+        let len2 = _mm256_add_pd(
+            _mm256_add_pd(_mm256_mul_pd(d[0], d[0]), _mm256_mul_pd(d[1], d[1])),
+            _mm256_mul_pd(d[2], d[2]),
+        );
+        let rest = _mm256_setr_pd(rest[a[0]], rest[a[1]], rest[a[2]], rest[a[3]]);
+        let max = _mm256_mul_pd(_mm256_set1_pd(ratio), rest);
+        // `inside_bound(max)`: `max * max * (1 - 4 eps)`, in that order.
+        let bound = _mm256_mul_pd(
+            _mm256_mul_pd(max, max),
+            _mm256_set1_pd(1.0 - 4.0 * f64::EPSILON),
+        );
+        // `!(len2 <= bound)`: unordered compares true, so a NaN goes on, as in `limit_one`.
+        let outside = _mm256_cmp_pd(len2, bound, _CMP_NLE_UQ);
+        if _mm256_movemask_pd(outside) == 0 {
+            return;
+        }
+        let len = _mm256_sqrt_pd(len2);
+        let over = _mm256_and_pd(outside, _mm256_cmp_pd(len, max, _CMP_NLE_UQ));
+        let factor = _mm256_div_pd(_mm256_sub_pd(len, max), len);
+        // Pins as lane masks (all ones where pinned).
+        let pins = |p: [usize; LANES]| {
+            let pin = |i: usize| -i64::from(pinned[p[i]]);
+            _mm256_castsi256_pd(_mm256_setr_epi64x(pin(0), pin(1), pin(2), pin(3)))
+        };
+        let (pin_a, pin_b) = (pins(a), pins(b));
+        // `limit_one`'s cases: a free end moves half the excess when the other is free too,
+        // all of it when the other is pinned; a pinned end stays (`andnot`: over and free).
+        let both_free = _mm256_andnot_pd(_mm256_or_pd(pin_a, pin_b), over);
+        let (move_a, move_b) = (_mm256_andnot_pd(pin_a, over), _mm256_andnot_pd(pin_b, over));
+        let half = _mm256_set1_pd(0.5);
+        let mut moved = [[[0.0; LANES]; 3]; 2];
+        for (c, (d, ends)) in d.iter().zip(&ends).enumerate() {
+            let excess = _mm256_mul_pd(*d, factor);
+            let step = _mm256_blendv_pd(excess, _mm256_mul_pd(excess, half), both_free);
+            let (at_a, at_b) = (ends[0], ends[1]);
+            let to_a = _mm256_blendv_pd(at_a, _mm256_add_pd(at_a, step), move_a);
+            let to_b = _mm256_blendv_pd(at_b, _mm256_sub_pd(at_b, step), move_b);
+            _mm256_storeu_pd(moved[0][c].as_mut_ptr(), to_a);
+            _mm256_storeu_pd(moved[1][c].as_mut_ptr(), to_b);
+        }
+        for l in 0..LANES {
+            let [ma, mb] = &moved;
+            points.put(a[l], Vec3::new(ma[0][l], ma[1][l], ma[2][l]));
+            points.put(b[l], Vec3::new(mb[0][l], mb[1][l], mb[2][l]));
+        }
+    }
+}
+
+/// Positions shared by the tasks of one class.
+struct Shared<'a> {
+    ptr: *mut Vec3,
+    len: usize,
+    _borrow: std::marker::PhantomData<&'a mut [Vec3]>,
+}
+
+// SAFETY: the tasks sharing it touch disjoint points (`Shared::new`'s contract).
+#[allow(unsafe_code)]
+unsafe impl Sync for Shared<'_> {}
+
+impl<'a> Shared<'a> {
+    /// # Safety
+    /// Tasks given views of it must never touch the same point while it lives.
+    #[allow(unsafe_code)]
+    unsafe fn new(positions: &'a mut [Vec3]) -> Self {
+        Self {
+            ptr: positions.as_mut_ptr(),
+            len: positions.len(),
+            _borrow: std::marker::PhantomData,
+        }
+    }
+
+    /// A view for one task.
+    ///
+    /// # Safety
+    /// The task must touch only points that no other task touches while it runs.
+    #[allow(unsafe_code)]
+    unsafe fn view(&self) -> View<'_> {
+        View {
+            ptr: self.ptr,
+            len: self.len,
+            _borrow: std::marker::PhantomData,
+        }
+    }
+}
+
+/// One task's access to [`Shared`] positions.
+struct View<'a> {
+    ptr: *mut Vec3,
+    len: usize,
+    _borrow: std::marker::PhantomData<&'a Shared<'a>>,
+}
+
+impl Points for View<'_> {
+    #[inline(always)]
+    fn at(&self, i: usize) -> Vec3 {
+        assert!(i < self.len, "a point past the end of the cloth");
+        // SAFETY: in bounds (just checked); no other task touches point `i` (`Shared::view`).
+        #[allow(unsafe_code)]
+        unsafe {
+            *self.ptr.add(i)
+        }
+    }
+
+    #[inline(always)]
+    fn put(&mut self, i: usize, p: Vec3) {
+        assert!(i < self.len, "a point past the end of the cloth");
+        // SAFETY: as in `at`.
+        #[allow(unsafe_code)]
+        unsafe {
+            *self.ptr.add(i) = p;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::assert_same_bits;
+    use crate::{MAX_STRETCH, pinned_grid};
+    use cloth_mesh::{ClothMesh, GridSpec, Orientation};
+
+    /// An `nw x nh` cloth at the standard spacing with every seventh point pinned (so lanes
+    /// meet every mix of pinned and free ends), scattered by up to 40 % of the spacing: a
+    /// third of the springs and more over the limit.
+    fn scattered_cloth(nw: usize, nh: usize, seed: u64) -> (ClothMesh, Vec<Vec3>) {
+        let pinned = (0..nw * nh)
+            .filter(|i| i % 7 == 3)
+            .map(|i| (i % nw, i / nw))
+            .collect();
+        let mesh = ClothMesh::new(&GridSpec {
+            width: (nw - 1) as f64 / 49.0,
+            height: (nh - 1) as f64 / 49.0,
+            num_width_points: nw,
+            num_height_points: nh,
+            thickness: 0.0095,
+            orientation: Orientation::Horizontal,
+            pinned,
+            ..GridSpec::default()
+        })
+        .unwrap();
+        let mut rng = cloth_mesh::SplitMix64::new(seed);
+        let h = 0.4 / 49.0;
+        let start = mesh
+            .start_positions()
+            .iter()
+            .map(|p| p + Vec3::new(rng.uniform(-h, h), rng.uniform(-h, h), rng.uniform(-h, h)))
+            .collect();
+        (mesh, start)
+    }
+
+    /// The order the module states, written from the mesh's spring list rather than the
+    /// stencil: per direction, class 0 then class 1, each class's springs one by one with
+    /// `limit_one`.
+    fn reference(mesh: &ClothMesh, positions: &mut [Vec3]) {
+        let nw = mesh.nw();
+        assert!(nw >= 4);
+        let offsets = offsets(nw);
+        for (t, &offset) in offsets.iter().enumerate() {
+            for bit in 0..2 {
+                let class = Class::of(t, bit);
+                for s in mesh.springs() {
+                    let (a, b) = (s.a as usize, s.b as usize);
+                    // From 4 columns on, each direction has its own offset.
+                    let in_class = b as isize - a as isize == offset
+                        && class.has_row(a / nw)
+                        && class.has_column(a % nw);
+                    if in_class {
+                        limit_one(a, b, s.rest, mesh.pinned(), positions, MAX_STRETCH);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_lanes_make_the_stated_orders_corrections_bit_for_bit() {
+        // Widths that leave every remainder of lanes in a row, on one thread and on a pool
+        // that splits the rows (64 x 150 is over twice `PARALLEL_CHUNK` points).
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        for (nw, nh, seed) in [
+            (5, 4, 1),
+            (13, 9, 2),
+            (22, 17, 3),
+            (37, 30, 4),
+            (64, 150, 5),
+        ] {
+            let (mesh, start) = scattered_cloth(nw, nh, seed);
+            let stencil = Stencil::new(&mesh).unwrap();
+            let mut expected = start.clone();
+            reference(&mesh, &mut expected);
+            let changed = expected.iter().zip(&start).filter(|(a, b)| a != b).count();
+            assert!(changed > mesh.len() / 4, "{nw} x {nh}: too few corrections");
+            for pool in [None, Some(&pool)] {
+                let mut colored = start.clone();
+                limit_colored(&stencil, mesh.pinned(), &mut colored, MAX_STRETCH, pool);
+                assert_same_bits(&colored, &expected);
+            }
+            // Pinned points never move.
+            for (i, _) in mesh.pinned().iter().enumerate().filter(|(_, p)| **p) {
+                assert_eq!(expected[i], start[i]);
+            }
+        }
+    }
+
+    #[test]
+    fn a_non_finite_point_stays_non_finite() {
+        let (mesh, mut start) = scattered_cloth(13, 9, 7);
+        let stencil = Stencil::new(&mesh).unwrap();
+        start[40].x = f64::NAN;
+        let mut expected = start.clone();
+        reference(&mesh, &mut expected);
+        let mut colored = start;
+        limit_colored(&stencil, mesh.pinned(), &mut colored, MAX_STRETCH, None);
+        assert_same_bits(&colored, &expected);
+        assert!(colored[40].x.is_nan());
+    }
+
+    #[test]
+    fn the_springs_of_a_class_share_no_point() {
+        // What the threads' disjoint writes and the order-free result rest on.
+        let mesh = pinned_grid(11).unwrap();
+        let nw = mesh.nw();
+        let offsets = offsets(nw);
+        let mut springs = 0;
+        for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
+            for bit in 0..2 {
+                let class = Class::of(t, bit);
+                let (first, count) = class.columns_in(valid_columns(nw, dx));
+                let mut touched = vec![false; mesh.len()];
+                for y in (dy.unsigned_abs()..mesh.nh()).filter(|&y| class.has_row(y)) {
+                    for i in 0..count {
+                        let x = class.column(first, i);
+                        assert!(class.has_column(x) && valid_columns(nw, dx).contains(&x));
+                        let a = y * nw + x;
+                        for p in [a, a.wrapping_add_signed(offsets[t])] {
+                            assert!(!touched[p], "direction {t} class {bit}: point {p} twice");
+                            touched[p] = true;
+                        }
+                        springs += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(
+            springs,
+            mesh.springs().len(),
+            "every spring in exactly one class"
+        );
+    }
+}
