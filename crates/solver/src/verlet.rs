@@ -27,7 +27,8 @@
 //! only the springs a vectorised pre-pass could not prove inside the limit, or with an end already
 //! moved (`limit`). With [`ConstraintOrder::Faithful`] (the default) steps 3 and 5 keep the
 //! course's sequential order and results; [`ConstraintOrder::Parallel`] trades that order for
-//! threads.
+//! threads, and [`ConstraintOrder::Colored`] for classes of independent springs, on SIMD lanes
+//! and threads (`colored`).
 
 mod colored;
 mod limit;
