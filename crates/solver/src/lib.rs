@@ -12,6 +12,7 @@
 mod bench;
 mod collider;
 mod diagnostics;
+mod disjoint;
 mod error;
 mod kind;
 mod params;

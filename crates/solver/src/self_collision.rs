@@ -3,6 +3,8 @@
 use cloth_mesh::{ClothMesh, Vec3};
 use rayon::prelude::*;
 
+use crate::disjoint::Disjoint;
+
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 
@@ -300,57 +302,6 @@ impl CellPass<'_> {
         if run_cell != PENDING {
             counts[run_cell as usize] += run_len;
         }
-    }
-}
-
-/// A slice that several threads read and write at once, each at its own indices.
-///
-/// NOTE: the threaded passes write interleaved or scattered but disjoint elements of one array
-/// (the placement: each run has its own places in every box; the resolution: each box the
-/// anchors of its own points, a few from each of a few rows), which no safe split of a slice
-/// can express. Holding the exclusive borrow keeps anything else off the array meanwhile.
-struct Disjoint<'a, T> {
-    ptr: *mut T,
-    len: usize,
-    _borrow: std::marker::PhantomData<&'a mut [T]>,
-}
-
-// SAFETY: the threads sharing a `Disjoint` touch disjoint elements (each use says why), and `T`
-// is sent between them.
-#[allow(unsafe_code)]
-unsafe impl<T: Send> Sync for Disjoint<'_, T> {}
-
-impl<'a, T: Copy> Disjoint<'a, T> {
-    fn new(slice: &'a mut [T]) -> Self {
-        Self {
-            ptr: slice.as_mut_ptr(),
-            len: slice.len(),
-            _borrow: std::marker::PhantomData,
-        }
-    }
-
-    /// Element `i`.
-    ///
-    /// # Safety
-    /// No other thread may write element `i` at the same time.
-    #[allow(unsafe_code)]
-    #[inline]
-    unsafe fn get(&self, i: usize) -> T {
-        assert!(i < self.len, "an index past the end of a shared slice");
-        // SAFETY: in bounds (just checked); the caller guarantees no concurrent write.
-        unsafe { *self.ptr.add(i) }
-    }
-
-    /// Sets element `i`.
-    ///
-    /// # Safety
-    /// No other thread may read or write element `i` at the same time.
-    #[allow(unsafe_code)]
-    #[inline]
-    unsafe fn set(&self, i: usize, value: T) {
-        assert!(i < self.len, "an index past the end of a shared slice");
-        // SAFETY: in bounds (just checked); the caller guarantees exclusive access.
-        unsafe { *self.ptr.add(i) = value }
     }
 }
 

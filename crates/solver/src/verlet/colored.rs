@@ -37,6 +37,7 @@ use rayon::ThreadPool;
 use cloth_mesh::Vec3;
 
 use super::sweep::{DIRECTIONS, Stencil, offsets, valid_columns};
+use crate::disjoint::Disjoint;
 use crate::self_collision::PARALLEL_CHUNK;
 use crate::stretch::{Points, limit_one};
 
@@ -67,10 +68,7 @@ pub(crate) fn limit_colored(
                 ratio,
                 pinned,
             };
-            // SAFETY: the springs of one class touch disjoint points (see the module), and
-            // each row of the class is swept by exactly one task.
-            #[allow(unsafe_code)]
-            let shared = unsafe { Shared::new(positions) };
+            let shared = Disjoint::new(positions);
             match pool {
                 Some(pool) => pool.install(|| springs.sweep(&shared, rows.clone(), true)),
                 None => springs.sweep(&shared, rows.clone(), false),
@@ -155,7 +153,7 @@ impl Springs<'_> {
     /// Checks and corrects the class's springs emitted by `rows`; when `threaded`, halving the
     /// rows between the current pool's threads down to about [`PARALLEL_CHUNK`] points.
     /// Recursion rather than a list of chunks, so nothing is allocated.
-    fn sweep(&self, shared: &Shared<'_>, rows: std::ops::Range<usize>, threaded: bool) {
+    fn sweep(&self, shared: &Disjoint<'_, Vec3>, rows: std::ops::Range<usize>, threaded: bool) {
         if threaded && rows.len() * self.nw > 2 * PARALLEL_CHUNK {
             let mid = rows.start + rows.len() / 2;
             rayon::join(
@@ -165,9 +163,9 @@ impl Springs<'_> {
             return;
         }
         // SAFETY: this task alone sweeps these rows of the class, whose springs touch points
-        // that no other spring of the class touches (see `limit_colored`).
+        // that no other spring of the class touches (see the module).
         #[allow(unsafe_code)]
-        let mut points = unsafe { shared.view() };
+        let mut points = unsafe { View::new(shared) };
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2, checked just above.
@@ -350,68 +348,34 @@ unsafe fn limit_lanes_avx2<P: Points + ?Sized>(
     }
 }
 
-/// Positions shared by the tasks of one class.
-struct Shared<'a> {
-    ptr: *mut Vec3,
-    len: usize,
-    _borrow: std::marker::PhantomData<&'a mut [Vec3]>,
-}
+/// One task's access to the positions shared by the tasks of a class.
+struct View<'a>(&'a Disjoint<'a, Vec3>);
 
-// SAFETY: the tasks sharing it touch disjoint points (`Shared::new`'s contract).
-#[allow(unsafe_code)]
-unsafe impl Sync for Shared<'_> {}
-
-impl<'a> Shared<'a> {
-    /// # Safety
-    /// Tasks given views of it must never touch the same point while it lives.
-    #[allow(unsafe_code)]
-    unsafe fn new(positions: &'a mut [Vec3]) -> Self {
-        Self {
-            ptr: positions.as_mut_ptr(),
-            len: positions.len(),
-            _borrow: std::marker::PhantomData,
-        }
-    }
-
-    /// A view for one task.
-    ///
+impl<'a> View<'a> {
     /// # Safety
     /// The task must touch only points that no other task touches while it runs.
     #[allow(unsafe_code)]
-    unsafe fn view(&self) -> View<'_> {
-        View {
-            ptr: self.ptr,
-            len: self.len,
-            _borrow: std::marker::PhantomData,
-        }
+    unsafe fn new(shared: &'a Disjoint<'a, Vec3>) -> Self {
+        Self(shared)
     }
-}
-
-/// One task's access to [`Shared`] positions.
-struct View<'a> {
-    ptr: *mut Vec3,
-    len: usize,
-    _borrow: std::marker::PhantomData<&'a Shared<'a>>,
 }
 
 impl Points for View<'_> {
     #[inline(always)]
     fn at(&self, i: usize) -> Vec3 {
-        assert!(i < self.len, "a point past the end of the cloth");
-        // SAFETY: in bounds (just checked); no other task touches point `i` (`Shared::view`).
+        // SAFETY: no other task touches point `i` (`View::new`).
         #[allow(unsafe_code)]
         unsafe {
-            *self.ptr.add(i)
+            self.0.get(i)
         }
     }
 
     #[inline(always)]
     fn put(&mut self, i: usize, p: Vec3) {
-        assert!(i < self.len, "a point past the end of the cloth");
         // SAFETY: as in `at`.
         #[allow(unsafe_code)]
         unsafe {
-            *self.ptr.add(i) = p;
+            self.0.set(i, p);
         }
     }
 }
