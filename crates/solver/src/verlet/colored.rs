@@ -217,18 +217,23 @@ impl Springs<'_> {
                 );
             }
             for a in (full..count).map(emitter) {
-                let b = a.wrapping_add_signed(self.offset);
-                limit_one(a, b, rest[a], self.pinned, points, self.ratio);
+                self.limit_one(a, rest, points);
             }
         }
+    }
+
+    /// `limit_one` on the spring emitted by `a`.
+    #[inline(always)]
+    fn limit_one<P: Points + ?Sized>(&self, a: usize, rest: &[f64], points: &mut P) {
+        let b = a.wrapping_add_signed(self.offset);
+        limit_one(a, b, rest[a], self.pinned, points, self.ratio);
     }
 
     /// [`Springs::rows`] one spring at a time, for CPUs without AVX2.
     fn rows_portable(&self, points: &mut View<'_>, rows: std::ops::Range<usize>) {
         self.rows(points, rows, |a, rest, points| {
             for a in a {
-                let b = a.wrapping_add_signed(self.offset);
-                limit_one(a, b, rest[a], self.pinned, points, self.ratio);
+                self.limit_one(a, rest, points);
             }
         });
     }
