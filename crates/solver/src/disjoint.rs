@@ -51,4 +51,20 @@ impl<'a, T: Copy> Disjoint<'a, T> {
         // SAFETY: in bounds (just checked); the caller guarantees exclusive access.
         unsafe { *self.ptr.add(i) = value }
     }
+
+    /// A pointer to the `len` elements from `start`, for a task's vector loads and stores.
+    ///
+    /// # Safety
+    /// No other thread may write these elements while the pointer is read from, nor read or
+    /// write them while it is written through.
+    #[allow(unsafe_code)]
+    #[inline]
+    pub(crate) unsafe fn run(&self, start: usize, len: usize) -> *mut T {
+        assert!(
+            start <= self.len && len <= self.len - start,
+            "a run past the end of a shared slice"
+        );
+        // SAFETY: in bounds (just checked).
+        unsafe { self.ptr.add(start) }
+    }
 }
