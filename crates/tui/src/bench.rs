@@ -2,7 +2,10 @@
 //!
 //! Frames are timed one by one; the table gives the median and the mean frame time, and the
 //! throughput and real-time factor at the median, so a frame slowed down by another process on a
-//! shared machine does not move the figures.
+//! shared machine does not move the figures. Each row also gives the worst spring's stretch at
+//! the end (a timing of a cloth that came apart is worth nothing) and, on Linux, the share of
+//! the machine's processor time its hypervisor took meanwhile (`steal`: on a shared virtual
+//! machine, the figures of a run with much of it are not the code's).
 //!
 //! Each configuration is the course's `pinned4` cloth scaled to `--grid N` points per side at the
 //! standard spacing ([`cloth_solver::pinned_grid`]), warmed up for one simulated second, then
@@ -13,6 +16,7 @@
 
 use std::fmt::Write as _;
 
+use crate::steal::CpuTimes;
 use anyhow::Context as _;
 use clap::ValueEnum;
 use cloth_mesh::ClothState;
@@ -157,6 +161,10 @@ struct Row {
     /// worth quoting for a cloth that held together (the course's limit keeps a hanging cloth
     /// near 1.1; an unstable run shows several times that).
     stretch: f64,
+    /// The percentage of the machine's processor time its hypervisor took while the
+    /// configuration ran, warm-up included (with `--interleave`: while the grid's configurations
+    /// ran), where the kernel tells it (see [`crate::steal`]).
+    steal: Option<f64>,
 }
 
 /// Times every configuration of the `n x n` cloth, one after the other or in turn.
@@ -173,6 +181,7 @@ fn time_grid(args: &Args, params: &StepParams, n: usize) -> anyhow::Result<Vec<R
         for config in &configs {
             let mut solver = config.build().with_context(|| config.describe(n))?;
             let mut state = ClothState::new(&mesh);
+            let before = CpuTimes::now();
             let result = time_frames(solver.as_mut(), &mesh, &[], params, &mut state, run)
                 .with_context(|| config.describe(n))?;
             rows.push(Row {
@@ -181,6 +190,7 @@ fn time_grid(args: &Args, params: &StepParams, n: usize) -> anyhow::Result<Vec<R
                 result,
                 ratio: None,
                 stretch: max_stretch_ratio(&mesh, &state),
+                steal: steal_since(before),
             });
         }
         return Ok(rows);
@@ -195,8 +205,10 @@ fn time_grid(args: &Args, params: &StepParams, n: usize) -> anyhow::Result<Vec<R
         .map(|s| &mut **s as &mut dyn Solver)
         .zip(states.iter_mut())
         .collect();
+    let before = CpuTimes::now();
     let timed = time_interleaved(&mut runs, &mesh, &[], params, run)
         .map_err(|(i, e)| anyhow::Error::new(e).context(configs[i].describe(n)))?;
+    let steal = steal_since(before);
     Ok(configs
         .iter()
         .zip(timed)
@@ -207,8 +219,14 @@ fn time_grid(args: &Args, params: &StepParams, n: usize) -> anyhow::Result<Vec<R
             result: t.result,
             ratio: Some(t.time_ratio_to_first),
             stretch: max_stretch_ratio(&mesh, state),
+            steal,
         })
         .collect())
+}
+
+/// The share of processor time stolen since `before` (see [`crate::steal`]).
+fn steal_since(before: Option<CpuTimes>) -> Option<f64> {
+    before?.steal_percent_until(CpuTimes::now()?)
 }
 
 /// Runs every configuration and prints the table (or JSON).
@@ -235,6 +253,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                      result: r,
                      ratio,
                      stretch,
+                     steal,
                  }| {
                     serde_json::json!({
                         "grid": n,
@@ -251,6 +270,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                         "realtime_factor": r.realtime_factor(),
                         "time_ratio_to_first": ratio,
                         "max_stretch_ratio_at_end": stretch,
+                        "host_steal_percent": steal,
                     })
                 },
             )
@@ -273,7 +293,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         if args.interleave {
             let _ = write!(out, " {:>9}", "vs first");
         }
-        let _ = write!(out, " {:>8}", "stretch");
+        let _ = write!(out, " {:>8} {:>6}", "stretch", "steal");
         out.push('\n');
         for Row {
             n,
@@ -281,6 +301,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             result: r,
             ratio,
             stretch,
+            steal,
         } in &rows
         {
             let _ = write!(
@@ -299,6 +320,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 let _ = write!(out, " {ratio:>8.3}x");
             }
             let _ = write!(out, " {stretch:>7.3}x");
+            match steal {
+                Some(steal) => {
+                    let _ = write!(out, " {steal:>5.1}%");
+                }
+                None => {
+                    let _ = write!(out, " {:>6}", "-");
+                }
+            }
             out.push('\n');
         }
     }

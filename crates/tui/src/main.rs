@@ -12,6 +12,7 @@ mod render;
 mod scenes;
 mod simulate;
 mod solvers;
+mod steal;
 
 use std::process::ExitCode;
 

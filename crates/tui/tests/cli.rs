@@ -358,14 +358,32 @@ fn bench_interleaves_every_configuration_and_reports_ratios_to_the_first() {
         let stretch = row["max_stretch_ratio_at_end"].as_f64().unwrap();
         assert!(stretch > 1.0 && stretch < 1.3, "{row}");
     }
-    // The table ends with the ratio column, then the stretch; without `--interleave` the JSON
-    // has no ratio.
+    // The host's steal share is measured over the whole interleaved run: one figure for every
+    // configuration of the grid, a percentage (Linux has `/proc/stat`).
+    let steal = &rows[0]["host_steal_percent"];
+    for row in rows {
+        assert_eq!(&row["host_steal_percent"], steal, "{row}");
+    }
+    if cfg!(target_os = "linux") {
+        let steal = steal.as_f64().unwrap();
+        assert!((0.0..=100.0).contains(&steal), "{steal}");
+    }
+    // The table ends with the ratio column, then the stretch, then the steal share; without
+    // `--interleave` the JSON has no ratio.
     let table = clothsim(&["bench", "--grid", "8", "--frames", "2", "--interleave"]);
     assert!(table.status.success(), "{}", stderr(&table));
     let text = String::from_utf8(table.stdout).unwrap();
-    assert!(text.lines().next().unwrap().ends_with("vs first  stretch"));
+    assert!(
+        text.lines()
+            .next()
+            .unwrap()
+            .ends_with("vs first  stretch  steal")
+    );
     let first = text.lines().nth(1).unwrap();
     assert!(first.contains(" 1.000x "), "{first}");
+    if cfg!(target_os = "linux") {
+        assert!(first.ends_with('%'), "{first}");
+    }
     let plain = clothsim(&["bench", "--grid", "8", "--frames", "2", "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&plain.stdout).unwrap();
     assert!(v[0]["time_ratio_to_first"].is_null());
