@@ -307,9 +307,9 @@ impl Layout {
 /// the blends. One at a time, as `limit_one`, the springs cost a branch each: on a big hanging
 /// cloth a third of the checked springs are over the limit, in no pattern a predictor learns.
 /// Whole-vector loads and stores, rather than a point at a time, because the ends of a group
-/// are consecutive points: 6 loads and a dozen shuffles in place of 24 scalar loads and inserts,
-/// and 6 stores in place of 24 (the 256 x 256 frame without self-collision: 0.77 x the time
-/// with a point-at-a-time gather).
+/// are consecutive points: 6 loads, 6 stores and about two dozen shuffles in place of 24 scalar
+/// loads with inserts and 24 scalar stores (the 256 x 256 frame without self-collision: 0.77 x
+/// the time with a point-at-a-time gather).
 ///
 /// Measured and left out: queueing the springs outside the bound and correcting them four at a
 /// time, so every square root and division does four springs' work (nearly every group holds
