@@ -395,56 +395,6 @@ unsafe fn correct(
         _mm256_cmp_pd, _mm256_div_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd,
         _mm256_set1_pd, _mm256_sqrt_pd, _mm256_sub_pd,
     };
-    // SAFETY (the block): AVX2 is there (the caller's contract).
-    unsafe {
-        let (outside, Check { d, len2, max }) = outside_lanes(&ends, rest, ratio);
-        let lanes::Lanes { a, b } = ends;
-        if _mm256_movemask_pd(outside) == 0 {
-            return None;
-        }
-        let len = _mm256_sqrt_pd(len2);
-        let over = _mm256_and_pd(outside, _mm256_cmp_pd(len, max, _CMP_NLE_UQ));
-        let factor = _mm256_div_pd(_mm256_sub_pd(len, max), len);
-        // `limit_one`'s cases: a free end moves half the excess when the other is free too,
-        // all of it when the other is pinned; a pinned end stays (`andnot`: over and free).
-        let both_free = _mm256_andnot_pd(_mm256_or_pd(pin_a, pin_b), over);
-        let (move_a, move_b) = (_mm256_andnot_pd(pin_a, over), _mm256_andnot_pd(pin_b, over));
-        let half = _mm256_set1_pd(0.5);
-        let (mut to_a, mut to_b) = (a, b);
-        for c in 0..3 {
-            let excess = _mm256_mul_pd(d[c], factor);
-            let step = _mm256_blendv_pd(excess, _mm256_mul_pd(excess, half), both_free);
-            to_a[c] = _mm256_blendv_pd(a[c], _mm256_add_pd(a[c], step), move_a);
-            to_b[c] = _mm256_blendv_pd(b[c], _mm256_sub_pd(b[c], step), move_b);
-        }
-        Some((to_a, to_b))
-    }
-}
-
-/// What [`outside_lanes`] computed on the way, for the corrections.
-#[cfg(target_arch = "x86_64")]
-struct Check {
-    d: lanes::Xyz,
-    len2: std::arch::x86_64::__m256d,
-    max: std::arch::x86_64::__m256d,
-}
-
-/// `limit_one`'s first check on the lanes' springs: all ones where the squared length is not
-/// within `inside_bound` (NaN included).
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
-#[inline(always)]
-unsafe fn outside_lanes(
-    ends: &lanes::Lanes,
-    rest: std::arch::x86_64::__m256d,
-    ratio: f64,
-) -> (std::arch::x86_64::__m256d, Check) {
-    use std::arch::x86_64::{
-        _CMP_NLE_UQ, _mm256_add_pd, _mm256_cmp_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_sub_pd,
-    };
     let lanes::Lanes { a, b } = ends;
     // SAFETY (the block): AVX2 is there (the caller's contract).
     unsafe {
@@ -467,7 +417,25 @@ unsafe fn outside_lanes(
         );
         // `!(len2 <= bound)`: unordered compares true, so a NaN goes on, as in `limit_one`.
         let outside = _mm256_cmp_pd(len2, bound, _CMP_NLE_UQ);
-        (outside, Check { d, len2, max })
+        if _mm256_movemask_pd(outside) == 0 {
+            return None;
+        }
+        let len = _mm256_sqrt_pd(len2);
+        let over = _mm256_and_pd(outside, _mm256_cmp_pd(len, max, _CMP_NLE_UQ));
+        let factor = _mm256_div_pd(_mm256_sub_pd(len, max), len);
+        // `limit_one`'s cases: a free end moves half the excess when the other is free too,
+        // all of it when the other is pinned; a pinned end stays (`andnot`: over and free).
+        let both_free = _mm256_andnot_pd(_mm256_or_pd(pin_a, pin_b), over);
+        let (move_a, move_b) = (_mm256_andnot_pd(pin_a, over), _mm256_andnot_pd(pin_b, over));
+        let half = _mm256_set1_pd(0.5);
+        let (mut to_a, mut to_b) = (a, b);
+        for c in 0..3 {
+            let excess = _mm256_mul_pd(d[c], factor);
+            let step = _mm256_blendv_pd(excess, _mm256_mul_pd(excess, half), both_free);
+            to_a[c] = _mm256_blendv_pd(a[c], _mm256_add_pd(a[c], step), move_a);
+            to_b[c] = _mm256_blendv_pd(b[c], _mm256_sub_pd(b[c], step), move_b);
+        }
+        Some((to_a, to_b))
     }
 }
 
