@@ -57,6 +57,7 @@ impl<'a, T: Copy> Disjoint<'a, T> {
     /// # Safety
     /// No other thread may write these elements while the pointer is read from, nor read or
     /// write them while it is written through.
+    #[cfg(target_arch = "x86_64")]
     #[allow(unsafe_code)]
     #[inline]
     pub(crate) unsafe fn run(&self, start: usize, len: usize) -> *mut T {

@@ -261,6 +261,7 @@ const LANES: usize = 4;
 
 /// How the ends of a group of [`LANES`] springs of a class lie in memory, from the group's
 /// first emitter `a0` and its partner `b0` (see [`Class::column`]).
+#[cfg(target_arch = "x86_64")]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Layout {
     /// The emitters are the 4 points from `a0`, their partners the 4 points from `b0`, in
@@ -274,6 +275,7 @@ enum Layout {
     Quads,
 }
 
+#[cfg(target_arch = "x86_64")]
 impl Layout {
     fn of(class: Class) -> Self {
         match class {
@@ -284,7 +286,6 @@ impl Layout {
     }
 
     /// The emitters of the group whose first emitter is `a0`, in the lanes' order.
-    #[cfg(target_arch = "x86_64")]
     fn emitters(self, a0: usize) -> [usize; LANES] {
         match self {
             Self::Rows => [a0, a0 + 1, a0 + 2, a0 + 3],
@@ -567,6 +568,8 @@ impl<'a> View<'a> {
     }
 }
 
+// Off x86-64 the groups are corrected a point at a time, with no runs of points.
+#[cfg(target_arch = "x86_64")]
 impl View<'_> {
     /// A pointer to the `len` points from `start`, this task's alone (`View::new`).
     #[allow(unsafe_code)]
