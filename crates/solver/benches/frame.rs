@@ -1,5 +1,6 @@
 //! One 30-step frame of the faithful Verlet solver: the five standard scenes, big grids and
-//! threads; and one self-collision pass at three sizes. Run with `cargo bench -p cloth-solver --bench frame`.
+//! threads; one self-collision pass at four sizes; and the divider's floor under a big cloth's
+//! step. Run with `cargo bench -p cloth-solver --bench frame`.
 //!
 //! Each benchmark first simulates one second (90 frames) so the cloth is hanging, stretched and
 //! in self-contact, then times frames continuing from there; throughput is reported in
@@ -149,10 +150,12 @@ fn grids(c: &mut Criterion) {
 /// reach wherever the cloth is (a wrinkled cloth). A linear pass then costs about the same per
 /// point at every size, up to cache effects (criterion reports points per second).
 ///
-/// Passes alternate between that cloth and the same cloth moved by a tenth of a box, so about a
-/// tenth of the points change box from one pass to the next (a falling 256 x 256 cloth changes
-/// about 3 % a step): the hash keeps its cells between rebuilds, and a cloth that never moved
-/// would time only its best case.
+/// Passes alternate between that cloth and the same cloth moved by a tenth of a box (`pass`), so
+/// about a tenth of the points change box from one pass to the next and the hash lays every
+/// point out again; or by a hundredth (`relayout`), about one point in a hundred, which the
+/// hash moves in its last layout (a 256 x 256 cloth falling onto itself changes 0.2-1 % a
+/// step). The hash keeps its cells between rebuilds, and a cloth that never moved would time
+/// only its best case.
 fn self_collision(c: &mut Criterion) {
     let mut g = c.benchmark_group("self_collision");
     g.sample_size(20);
@@ -173,24 +176,26 @@ fn self_collision(c: &mut Criterion) {
             })
             .collect();
         let box_w = SpatialHash::box_size(&mesh).0;
-        let moved: Vec<Vec3> = template
-            .iter()
-            .map(|p| p + Vec3::new(box_w / 10.0, 0.0, 0.0))
-            .collect();
-        let templates = [template, moved];
-        let mut hash = SpatialHash::default();
-        let mut work = templates[0].clone();
-        let mut pass = 0usize;
         g.throughput(Throughput::Elements(mesh.len() as u64));
-        g.bench_function(BenchmarkId::new("pass", n), |b| {
-            b.iter(|| {
-                // The copy is linear too; it keeps every pass starting from one of two states.
-                pass += 1;
-                work.copy_from_slice(&templates[pass % 2]);
-                hash.resolve(&mesh, &mut work, 30);
-                black_box(&work);
+        for (name, shift) in [("pass", 10.0), ("relayout", 100.0)] {
+            let moved: Vec<Vec3> = template
+                .iter()
+                .map(|p| p + Vec3::new(box_w / shift, 0.0, 0.0))
+                .collect();
+            let templates = [template.clone(), moved];
+            let mut hash = SpatialHash::default();
+            let mut work = templates[0].clone();
+            let mut pass = 0usize;
+            g.bench_function(BenchmarkId::new(name, n), |b| {
+                b.iter(|| {
+                    // The copy is linear too; it keeps every pass starting from one of two states.
+                    pass += 1;
+                    work.copy_from_slice(&templates[pass % 2]);
+                    hash.resolve(&mesh, &mut work, 30);
+                    black_box(&work);
+                });
             });
-        });
+        }
     }
     g.finish();
 }
@@ -232,5 +237,64 @@ impl BenchMarkName {
     }
 }
 
-criterion_group!(benches, standard, grids, self_collision, threads);
+/// The divider's floor under a 256 x 256 step: a square root and a division for each of the
+/// cloth's 390,658 springs, four at a time on AVX2, with nothing else to do. The force pass
+/// needs that for every spring, and the colored order's limit for nearly every one (a group
+/// of four takes both whenever one of its springs is over the bound): so two of these are a
+/// step's floor, whatever the layout. Throughput is in springs.
+fn divider(c: &mut Criterion) {
+    let mut g = c.benchmark_group("divider");
+    g.sample_size(20);
+    let springs = pinned_grid(256).unwrap().springs().len();
+    let len2: Vec<f64> = (0..springs)
+        .map(|k| 4e-4 * (1.0 + (k % 97) as f64 * 1e-3))
+        .collect();
+    let rest = vec![0.02; springs];
+    let mut factor = vec![0.0; springs];
+    g.throughput(Throughput::Elements(springs as u64));
+    g.bench_function(BenchmarkId::new("sqrt_div", 256), |b| {
+        b.iter(|| {
+            stretch_factors(black_box(&len2), black_box(&rest), &mut factor);
+            black_box(&factor);
+        });
+    });
+    g.finish();
+}
+
+/// `(|d| - rest) / |d|` from `|d|^2`, the factor of a spring's force and of its correction.
+fn stretch_factors(len2: &[f64], rest: &[f64], factor: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, checked just above.
+        #[allow(unsafe_code)]
+        unsafe {
+            stretch_factors_avx2(len2, rest, factor);
+        }
+        return;
+    }
+    stretch_factors_portable(len2, rest, factor);
+}
+
+#[inline(always)]
+#[allow(clippy::inline_always)]
+fn stretch_factors_portable(len2: &[f64], rest: &[f64], factor: &mut [f64]) {
+    for ((f, l2), r) in factor.iter_mut().zip(len2).zip(rest) {
+        let len = l2.sqrt();
+        *f = (len - r) / len;
+    }
+}
+
+/// [`stretch_factors_portable`] compiled for AVX2: the compiler makes it packed square roots
+/// and divisions, four lanes each.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx2")]
+unsafe fn stretch_factors_avx2(len2: &[f64], rest: &[f64], factor: &mut [f64]) {
+    stretch_factors_portable(len2, rest, factor);
+}
+
+criterion_group!(benches, standard, grids, self_collision, threads, divider);
 criterion_main!(benches);
