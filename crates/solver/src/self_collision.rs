@@ -51,7 +51,7 @@ mod lanes {
 ///    before it or of the one a row up;
 /// 2. when the last layout is known and only a few points changed box (a moving cloth: about one
 ///    point in two hundred a step), those points are moved in it: the boxes between them slide
-///    as blocks (see [`SpatialHash::relayout`]);
+///    as blocks (see `SpatialHash::relayout`);
 /// 3. otherwise a count per cell, a prefix sum and one placement pass lay the points out box by
 ///    box.
 ///
@@ -72,7 +72,7 @@ mod lanes {
 ///
 /// Every pass is linear in the number of points or cells (at most about twice the boxes in use:
 /// the table is cleared when the cloth has left more boxes behind), but for the relayout's sort
-/// of its moves (at most one point in [`RELAYOUT_SHARE`]); once the arrays have grown, nothing
+/// of its moves (at most one point in `RELAYOUT_SHARE`); once the arrays have grown, nothing
 /// is allocated.
 #[derive(Debug, Default, Clone)]
 pub struct SpatialHash {
