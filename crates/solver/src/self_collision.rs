@@ -1364,6 +1364,26 @@ mod tests {
         );
     }
 
+    /// `positions` resolved by a fresh hash, which has no memory and so looks into every box,
+    /// after checking that `kept`, on one thread and on `pool`'s, correct them the same, bit
+    /// for bit.
+    fn resolved_as_fresh(
+        mesh: &ClothMesh,
+        positions: &[Vec3],
+        [kept, kept_threaded]: [&mut SpatialHash; 2],
+        pool: &rayon::ThreadPool,
+    ) -> Vec<Vec3> {
+        let mut fresh = positions.to_vec();
+        SpatialHash::default().resolve(mesh, &mut fresh, 30);
+        let mut one = positions.to_vec();
+        kept.resolve(mesh, &mut one, 30);
+        let mut three = positions.to_vec();
+        kept_threaded.resolve_in(mesh, &mut three, 30, Some(pool));
+        assert_same_bits(&one, &fresh);
+        assert_same_bits(&three, &fresh);
+        fresh
+    }
+
     #[test]
     fn boxes_skipped_on_their_allowance_make_the_corrections_of_a_fresh_hash() {
         // A flat cloth whose boxes are clear (spacing 1 cm, reach 4 mm) trembles by a few
@@ -1398,14 +1418,8 @@ mod tests {
                     p.x += box_w / 3.0;
                 }
             }
-            let mut fresh = positions.clone();
-            SpatialHash::default().resolve(&mesh, &mut fresh, 30);
-            let mut one = positions.clone();
-            kept.resolve(&mesh, &mut one, 30);
-            let mut three = positions.clone();
-            kept_threaded.resolve_in(&mesh, &mut three, 30, Some(&pool));
-            assert_same_bits(&one, &fresh);
-            assert_same_bits(&three, &fresh);
+            let fresh =
+                resolved_as_fresh(&mesh, &positions, [&mut kept, &mut kept_threaded], &pool);
             skipped += kept.memory.iter().filter(|m| m.skips > 0).count();
             walker_pushed |= fresh[walker] != positions[walker];
             positions = fresh;
@@ -1447,14 +1461,8 @@ mod tests {
             }
             let towards = (positions[neighbour] - positions[walker]).normalize();
             positions[walker] += towards * 5e-5;
-            let mut fresh = positions.clone();
-            SpatialHash::default().resolve(&mesh, &mut fresh, 30);
-            let mut one = positions.clone();
-            kept.resolve(&mesh, &mut one, 30);
-            let mut three = positions.clone();
-            kept_threaded.resolve_in(&mesh, &mut three, 30, Some(&pool));
-            assert_same_bits(&one, &fresh);
-            assert_same_bits(&three, &fresh);
+            let fresh =
+                resolved_as_fresh(&mesh, &positions, [&mut kept, &mut kept_threaded], &pool);
             if step > 0 {
                 // Boxes of two points or more, against those skipped at this step.
                 let boxes = kept.start.windows(2).filter(|w| w[1] - w[0] >= 2).count();
