@@ -6,7 +6,7 @@
 //! The step minimises the same incremental potential as [`ImplicitEuler`](crate::ImplicitEuler),
 //! `Phi(x) = (1 + c h)/(2 h^2) |x - y|_M^2 + E(x)`, `y = x0 + h v0 / (1 + c h)`, using the
 //! identity `k/2 (|d| - L)^2 = min_{|p| = L} k/2 |d - p|^2` for each spring vector `d`. Starting
-//! from `x = y`, each of `params.iterations` iterations does
+//! from `x = y`, each of the solver's `iterations` iterations does
 //!
 //! ```text
 //! local:   p_s = L_s d_s / |d_s|                        (per spring, closed form)
@@ -40,8 +40,8 @@
 //!
 //! Every global step is a convex quadratic solve, so the iteration is stable for any step and
 //! stiffness; with few iterations it under-resolves stiff springs, which makes the cloth look
-//! softer and more damped, never unstable. `params.iterations` (a live parameter, 10 by default)
-//! trades accuracy for speed; at convergence the step equals [`ImplicitEuler`]'s.
+//! softer and more damped, never unstable. The iteration count (the solver's `iterations`
+//! option, [`DEFAULT_ITERATIONS`] by default) trades accuracy for speed; at convergence the step equals [`ImplicitEuler`]'s.
 //!
 //! [`ImplicitEuler`]: crate::ImplicitEuler
 
@@ -56,8 +56,10 @@ use crate::topology::{NONE, Topology};
 
 /// The fast local/global implicit solver. Owns caches (topology, factored matrix, multiplier
 /// warm start) and scratch memory only.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct FastImplicit {
+    /// Local/global iterations per step (at least 1).
+    iterations: u32,
     system: Option<System>,
     /// Tension multipliers of the stretch limit, N, one per spring (warm start).
     lambda: Vec<f64>,
@@ -84,11 +86,41 @@ struct System {
     key: Option<MatrixKey>,
 }
 
+/// Local/global iterations per step of [`FastImplicit::new`].
+pub const DEFAULT_ITERATIONS: u32 = 10;
+
+impl Default for FastImplicit {
+    fn default() -> Self {
+        Self::with_iterations(DEFAULT_ITERATIONS)
+    }
+}
+
 impl FastImplicit {
-    /// A new solver; its caches are built on the first step.
+    /// A new solver with [`DEFAULT_ITERATIONS`] iterations per step; its caches are built on the
+    /// first step.
     #[must_use]
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// A new solver doing `iterations` local/global iterations per step (0 counts as 1).
+    #[must_use]
+    pub fn with_iterations(iterations: u32) -> Self {
+        Self {
+            iterations: iterations.max(1),
+            system: None,
+            lambda: Vec::new(),
+            rhs: Vec::new(),
+            y: Vec::new(),
+            x: Vec::new(),
+            hash: SpatialHash::default(),
+        }
+    }
+
+    /// Local/global iterations per step.
+    #[must_use]
+    pub fn iterations(&self) -> u32 {
+        self.iterations
     }
 
     /// Makes sure the topology, the symbolic factor and the numeric factor describe `mesh` and
@@ -203,7 +235,7 @@ impl Solver for FastImplicit {
         let starts = mesh.start_positions();
 
         let mut residual = 0.0;
-        for _ in 0..params.iterations {
+        for _ in 0..self.iterations {
             // Local step and right-hand side together.
             for (f, &p) in topo.free_points.iter().enumerate() {
                 let b = self.y[p as usize] * inertia + weight;
@@ -282,7 +314,7 @@ impl Solver for FastImplicit {
             &mut self.hash,
         )?;
         Ok(StepReport {
-            iterations: params.iterations,
+            iterations: self.iterations,
             residual,
         })
     }

@@ -10,6 +10,9 @@
 //!   iterations with one constant, prefactored matrix. The cheapest stable option for large,
 //!   stiff cloths.
 //!
+//! Each is offered by name through its registry entry ([`ImplicitEuler::ENTRY`],
+//! [`FastImplicit::ENTRY`]), with its own options (`tolerance`, `iterations`).
+//!
 //! Both read the course's live parameters ([`cloth_solver::StepParams`]): the damping becomes
 //! the drag rate [`StepParams::drag_rate`](cloth_solver::StepParams::drag_rate), so it does not
 //! change with the step; the 10 % stretch limit is part of the minimised energy rather than a
@@ -19,13 +22,14 @@
 
 mod cholesky;
 mod commit;
+mod entries;
 mod fast_implicit;
 mod implicit_euler;
 mod retime;
 mod spring_energy;
 mod topology;
 
-pub use fast_implicit::FastImplicit;
+pub use fast_implicit::{DEFAULT_ITERATIONS, FastImplicit};
 pub use implicit_euler::{ImplicitEuler, MAX_NEWTON_ITERATIONS, NEWTON_TOLERANCE};
 pub use retime::retime_velocity;
 pub use spring_energy::{LIMIT_OVERSHOOT, limiter_stiffness};

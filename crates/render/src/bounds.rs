@@ -1,7 +1,7 @@
 //! World-space boxes used to fit orthographic views and to size the floor patch.
 
+use cloth_mesh::Collider;
 use cloth_mesh::Vec3;
-use cloth_solver::Collider;
 
 use crate::RenderError;
 
@@ -170,7 +170,7 @@ pub(crate) fn plane_basis(normal: Vec3) -> (Vec3, Vec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use cloth_solver::{Plane, Sphere};
+    use cloth_mesh::{Plane, Sphere};
 
     #[test]
     fn scene_bounds_hold_cloth_sphere_and_a_floor_patch_under_them() {

@@ -1,7 +1,7 @@
 //! The renderer: cloth state + colliders + camera -> [`AsciiFrame`].
 
 use cloth_mesh::{ClothMesh, ClothState, Vec3, vertex_normals};
-use cloth_solver::{Collider, Plane, Sphere};
+use cloth_mesh::{Collider, Plane, Sphere};
 
 use crate::bounds::plane_basis;
 use crate::glyphs::{

@@ -7,8 +7,8 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use cloth_mesh::{ClothMesh, ClothState, GridSpec, Vec3};
+use cloth_mesh::{Collider, Plane, Sphere};
 use cloth_render::{AsciiFrame, Mode, RenderOptions, Renderer, View, ViewSpec};
-use cloth_solver::{Collider, Plane, Sphere};
 
 struct Counting;
 

@@ -101,10 +101,20 @@ pub struct SimulationBlock {
     /// Whether the 10 % stretch limit is on (default true).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stretch_limit: Option<bool>,
-    /// Solver name: `verlet` (default), `implicit` or `fast-implicit`.
+    /// Solver name, as listed by `clothsim solvers` (default: the application's first solver,
+    /// `verlet`). This crate keeps it as text; the application checks it against the solvers it
+    /// has.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solver: Option<String>,
-    /// Inner iterations per step of iterative solvers (default 10).
+    /// Options of the scene's solver, an object (`{"iterations": 20}` for `fast-implicit`); the
+    /// solver checks them, and `clothsim solvers` lists each solver's options. They apply to the
+    /// solver this file names (or, when it names none, to the default one), not to another
+    /// solver chosen on the command line or in the UI.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solver_options: Option<serde_json::Map<String, serde_json::Value>>,
+    /// The older spelling of the `iterations` solver option, still read: it sets the
+    /// `iterations` option of any solver that has one (`fast-implicit`) unless `solver_options`
+    /// sets it; solvers without one ignore it. An integer from 1 to 1000.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub iterations: Option<u64>,
     /// Seed of the vertical cloth's z-jitter (default 184).

@@ -4,7 +4,11 @@
 //! unknown keys are errors, as in the course's loader, so typos are caught. clothsim adds a few
 //! optional keys of its own (all documented on [`SceneFile`]): a top-level `description`, and a
 //! `simulation` block with `frames_per_sec`, `simulation_steps`, `gravity`, `self_collision`,
-//! `stretch_limit`, `solver`, `iterations` and `seed`, so one file fully describes a run.
+//! `stretch_limit`, `solver`, `solver_options`, `iterations` (an alias of the `iterations` solver
+//! option) and `seed`, so one file fully describes a run.
+//!
+//! This crate knows no solvers: it keeps the solver's name and options as written, and the
+//! application checks them against the solvers it was built with.
 //!
 //! Every error names the file, the key, the bad value and what is allowed.
 

@@ -2,9 +2,10 @@
 
 use std::path::Path;
 
-use cloth_mesh::{ClothMesh, GridSpec, MeshError, Orientation, Vec3};
-use cloth_solver::{Collider, Plane, SolverKind, Sphere, StepParams};
-use serde_json::Value;
+use cloth_mesh::{
+    ClothMesh, Collider, GridSpec, MeshError, Orientation, Plane, Sphere, StepParams, Vec3,
+};
+use serde_json::{Map, Value};
 
 use crate::{SceneError, SceneFile, SimulationBlock, apply_set, bundled};
 
@@ -21,19 +22,57 @@ pub struct Scene {
     pub params: StepParams,
     /// Collision objects: the sphere, then the plane, when present.
     pub colliders: Vec<Collider>,
-    /// The solver the scene asks for.
-    pub solver: SolverKind,
+    /// The solver the scene asks for (`simulation.solver`), or `None` for the application's
+    /// default. Not checked here: this crate knows no solvers; the application checks the name
+    /// against the solvers it has, naming this scene and the key.
+    pub solver: Option<String>,
+    /// The options for that solver (`simulation.solver_options`; empty when absent), checked by
+    /// the solver itself when it is built.
+    pub solver_options: Map<String, Value>,
+    /// `simulation.iterations`, the older spelling of the `iterations` solver option (see
+    /// [`Scene::options_for`]).
+    pub iterations: Option<u32>,
 }
 
 impl Scene {
-    /// The scene's file with `params`, `colliders`' friction and `solver` written into it, so a
-    /// run edited live can be saved and reloaded to the same state.
+    /// The options a run of the solver `name` gets from this scene, as a JSON object.
+    ///
+    /// `simulation.solver_options` belongs to the scene's own solver (the default one when the
+    /// scene names none, whose name the caller passes as `default`), so another solver gets
+    /// none of them. The alias `simulation.iterations` fills in an `iterations` option that
+    /// `solver_options` leaves out, for a solver that `has_option("iterations")`.
+    #[must_use]
+    pub fn options_for(
+        &self,
+        name: &str,
+        default: &str,
+        has_option: impl Fn(&str) -> bool,
+    ) -> Value {
+        let own = self.solver.as_deref().unwrap_or(default);
+        let mut options = if own == name {
+            self.solver_options.clone()
+        } else {
+            Map::new()
+        };
+        if let Some(n) = self.iterations
+            && has_option("iterations")
+            && !options.contains_key("iterations")
+        {
+            options.insert("iterations".to_owned(), Value::from(n));
+        }
+        Value::Object(options)
+    }
+
+    /// The scene's file with `params`, `colliders`' friction, the solver `solver` and its
+    /// `options` (a JSON object) written into it, so a run edited live can be saved and
+    /// reloaded to the same state.
     #[must_use]
     pub fn to_file(
         &self,
         params: &StepParams,
         colliders: &[Collider],
-        solver: SolverKind,
+        solver: &str,
+        options: &Value,
     ) -> SceneFile {
         let mut f = self.file.clone();
         f.cloth.ks = params.ks;
@@ -65,8 +104,14 @@ impl Scene {
         sim.stretch_limit = (params.stretch_limit != defaults.stretch_limit
             || sim.stretch_limit.is_some())
         .then_some(params.stretch_limit);
-        sim.solver = Some(solver.name().to_owned());
-        sim.iterations = Some(u64::from(params.iterations));
+        sim.solver = Some(solver.to_owned());
+        let options = options.as_object().cloned().unwrap_or_default();
+        // NOTE: the options now say the iteration count; the alias would only shadow an
+        // `iterations` option of another solver chosen later, so it goes.
+        if options.contains_key("iterations") {
+            sim.iterations = None;
+        }
+        sim.solver_options = (!options.is_empty()).then_some(options);
         f.simulation = Some(sim);
         f
     }
@@ -285,6 +330,7 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         self_collision,
         stretch_limit,
         solver,
+        solver_options,
         iterations,
         seed,
     } = sim;
@@ -310,25 +356,14 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         None => defaults.steps_per_frame,
     };
     let iterations = match iterations {
-        Some(s) if (1..=1000).contains(&s) => s as u32,
+        Some(s) if (1..=1000).contains(&s) => Some(s as u32),
         Some(s) => return Err(ck.fail("simulation.iterations", s, "an integer from 1 to 1000")),
-        None => defaults.iterations,
+        None => None,
     };
     let gravity = match gravity {
         Some(g) => ck.vec3("simulation.gravity", g)?,
         None => defaults.gravity,
     };
-    let solver = match solver {
-        Some(name) => name.parse::<SolverKind>().map_err(|_| {
-            ck.fail(
-                "simulation.solver",
-                format!("{name:?}"),
-                "one of \"verlet\", \"implicit\", \"fast-implicit\"",
-            )
-        })?,
-        None => SolverKind::default(),
-    };
-
     let params = StepParams {
         ks: c.ks,
         density: c.density,
@@ -341,7 +376,6 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         frames_per_sec,
         self_collision: self_collision.unwrap_or(defaults.self_collision),
         stretch_limit: stretch_limit.unwrap_or(defaults.stretch_limit),
-        iterations,
     };
 
     let mut colliders = Vec::new();
@@ -392,6 +426,8 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         params,
         colliders,
         solver,
+        solver_options: solver_options.unwrap_or_default(),
+        iterations,
     })
 }
 

@@ -9,10 +9,11 @@
 use std::hint::black_box;
 use std::time::Duration;
 
+use cloth_bench::{BenchRun, pinned_grid, time_frames};
 use cloth_mesh::{ClothMesh, ClothState, GridSpec, Orientation, Vec3};
 use cloth_solver::{
-    BenchRun, Collider, ConstraintOrder, Plane, Solver, SpatialHash, Sphere, StepParams, Verlet,
-    advance_frame, pinned_grid, time_frames,
+    Collider, ConstraintOrder, Plane, Solver, SpatialHash, Sphere, StepParams, Verlet,
+    advance_frame,
 };
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 

@@ -2,8 +2,9 @@
 //! (`perf stat`, `perf record`): `cargo run --release -p cloth-solver --example frames --
 //! <grid points per side> <self-collision on|off> <frames> [threads] [faithful|parallel]`.
 
+use cloth_bench::{BenchRun, pinned_grid, time_frames};
 use cloth_mesh::ClothState;
-use cloth_solver::{BenchRun, ConstraintOrder, StepParams, Verlet, pinned_grid, time_frames};
+use cloth_solver::{ConstraintOrder, StepParams, Verlet};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();

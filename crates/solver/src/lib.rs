@@ -5,33 +5,46 @@
 //! state, so the caller may swap solvers between any two steps and the cloth keeps its motion.
 //!
 //! [`Verlet`] is the reference: the course's explicit damped position Verlet, step for step.
-//! Anyone can write another solver crate against this trait; `cloth-implicit` is one.
+//! Anyone can write another solver crate against this trait; `cloth-implicit` is one. A solver
+//! is offered to users by name through a [`SolverEntry`] (name, description, steps per frame,
+//! options, constructor) in a [`Registry`] that the binary assembles ([`Verlet::ENTRY`] is
+//! Verlet's).
 //!
 //! Units are SI throughout: metres, seconds, kilograms, newtons.
 
-mod bench;
-mod collider;
 mod diagnostics;
 mod disjoint;
 mod error;
-mod kind;
-mod params;
+mod registry;
 mod self_collision;
 mod stretch;
 mod verlet;
+mod verlet_entry;
 
 #[cfg(test)]
 mod testing;
 
-pub use bench::{
-    BenchResult, BenchRun, InterleavedResult, pinned_grid, time_frames, time_interleaved,
+/// The course's cloth at any size, for the unit tests of the fast paths.
+#[cfg(test)]
+pub(crate) use cloth_bench::pinned_grid;
+
+/// The parameter constants under their old module path, for the solver's own modules.
+mod params {
+    pub(crate) use cloth_mesh::MAX_STRETCH;
+}
+
+// NOTE: the world's data (colliders, parameters) lives in cloth-mesh, below every solver, so
+// scene files and renderers need no solver crate; it is re-exported here so that a solver
+// written against this crate finds everything it needs in one place.
+pub use cloth_mesh::{
+    ClothMesh, ClothState, Collider, MAX_STRETCH, ParamError, Plane, REFERENCE_STEPS_PER_FRAME,
+    SURFACE_OFFSET, Sphere, StepParams, Vec3, apply_colliders,
 };
-pub use cloth_mesh::{ClothMesh, ClothState, Vec3};
-pub use collider::{Collider, Plane, Sphere, apply_colliders};
 pub use diagnostics::{kinetic_energy, max_stretch_ratio};
 pub use error::SolveError;
-pub use kind::{SolverKind, UnknownSolver};
-pub use params::{MAX_STRETCH, ParamError, REFERENCE_STEPS_PER_FRAME, StepParams};
+pub use registry::{
+    BuildSolver, OptionError, OptionKind, Registry, SolverEntry, SolverOption, UnknownSolver,
+};
 pub use self_collision::SpatialHash;
 pub use stretch::limit_stretch;
 pub use verlet::{ConstraintOrder, Verlet};

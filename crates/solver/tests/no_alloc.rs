@@ -6,10 +6,9 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use cloth_bench::pinned_grid;
 use cloth_mesh::{ClothState, Vec3};
-use cloth_solver::{
-    Collider, ConstraintOrder, Solver, Sphere, StepParams, Verlet, advance_frame, pinned_grid,
-};
+use cloth_solver::{Collider, ConstraintOrder, Solver, Sphere, StepParams, Verlet, advance_frame};
 
 struct Counting;
 

@@ -5,10 +5,9 @@
 //! faithful pass in every order); these tests show they keep the model's constraint and settle
 //! where the course's order settles, and that thread counts never change results.
 
+use cloth_bench::pinned_grid;
 use cloth_mesh::{ClothMesh, ClothState};
-use cloth_solver::{
-    ConstraintOrder, Solver, StepParams, Verlet, advance_frame, max_stretch_ratio, pinned_grid,
-};
+use cloth_solver::{ConstraintOrder, Solver, StepParams, Verlet, advance_frame, max_stretch_ratio};
 
 /// Four simulated seconds: the `pinned4` cloth has fallen, swung and settled into its hanging
 /// shape (the drag of 5.4 1/s damps motion by e^-21 in that time).

@@ -26,7 +26,7 @@ mod tests;
 use std::io::IsTerminal;
 
 use cloth_render::{ColorChoice, ColorDepth, Mode};
-use cloth_solver::SolverKind;
+use cloth_solver::Registry;
 
 pub use message::Message;
 pub use model::App;
@@ -41,9 +41,9 @@ pub struct Args {
     /// A bundled scene name (see `clothsim scenes`) or a path to a scene JSON file.
     #[arg(default_value = "pinned4")]
     pub scene: String,
-    /// The solver (overrides the scene's `simulation.solver`).
+    /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).
     #[arg(long)]
-    pub solver: Option<SolverKind>,
+    pub solver: Option<String>,
     /// Override a scene value: a dotted key and a JSON value, e.g. `cloth.ks=100000`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
@@ -76,13 +76,14 @@ impl Default for Args {
     }
 }
 
-/// Builds the app for `args` (no terminal involved), as the binary and the tests do.
+/// Builds the app for `args` with the solvers of `registry` (no terminal involved), as the
+/// binary and the tests do.
 ///
 /// # Errors
-/// A scene that does not load or a solver that is not built in.
-pub fn build(args: &Args, is_tty: bool) -> anyhow::Result<App> {
+/// A scene that does not load or a solver that is not registered or refuses its options.
+pub fn build(args: &Args, registry: &Registry, is_tty: bool) -> anyhow::Result<App> {
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
-    let sim = Simulation::new(scene, args.solver)?;
+    let sim = Simulation::new(scene, registry.clone(), args.solver.as_deref())?;
     let mut app = App::new(sim, !args.paused);
     let no_color = std::env::var("NO_COLOR").ok();
     let colorterm = std::env::var("COLORTERM").ok();
@@ -107,13 +108,13 @@ pub fn build(args: &Args, is_tty: bool) -> anyhow::Result<App> {
 ///
 /// # Errors
 /// When stdout is not a terminal, the scene does not load, or the terminal fails.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     if !std::io::stdout().is_terminal() {
         anyhow::bail!(
             "the live UI needs a terminal, but stdout is not one; to write frames to a file or a \
              pipe use `clothsim render` (or `clothsim simulate` for the final state)"
         );
     }
-    let app = build(args, true)?;
+    let app = build(args, registry, true)?;
     runner::run(app, args.fps)
 }

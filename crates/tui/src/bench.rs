@@ -8,22 +8,22 @@
 //! machine, the figures of a run with much of it are not the code's).
 //!
 //! Each configuration is the course's `pinned4` cloth scaled to `--grid N` points per side at the
-//! standard spacing ([`cloth_solver::pinned_grid`]), warmed up for one simulated second, then
-//! timed by [`cloth_solver::time_frames`], or with `--interleave` frame by frame in turn with
-//! the grid's other configurations by [`cloth_solver::time_interleaved`]. Criterion benches
-//! (`cargo bench -p cloth-solver`) are the measurement of record; this command lets a user
-//! reproduce the README's table.
+//! standard spacing ([`cloth_bench::pinned_grid`]), warmed up for one simulated second, then
+//! timed by [`cloth_bench::time_frames`], or with `--interleave` frame by frame in turn with
+//! the grid's other configurations by [`cloth_bench::time_interleaved`]. Any registered solver
+//! can be timed by name; `--threads` and `--order` set the options of those names of the
+//! solvers that have them (Verlet's). Criterion benches (`cargo bench -p cloth-solver`) are the
+//! measurement of record; this command lets a user reproduce the README's table.
 
 use std::fmt::Write as _;
 
 use crate::steal::CpuTimes;
 use anyhow::Context as _;
 use clap::ValueEnum;
-use cloth_mesh::ClothState;
-use cloth_solver::{
-    BenchResult, BenchRun, ConstraintOrder, Solver, SolverKind, StepParams, Verlet,
-    max_stretch_ratio, pinned_grid, time_frames, time_interleaved,
-};
+use cloth_bench::{BenchResult, BenchRun, pinned_grid, time_frames, time_interleaved};
+use cloth_mesh::{ClothMesh, ClothState};
+use cloth_solver::{Registry, Solver, SolverEntry, StepParams, max_stretch_ratio};
+use serde_json::{Map, Value};
 
 /// `clothsim bench` options.
 #[derive(Debug, clap::Args)]
@@ -31,23 +31,21 @@ pub struct Args {
     /// Points per side of the pinned cloth (repeatable), e.g. `--grid 50 --grid 256`.
     #[arg(long = "grid", default_values_t = [50])]
     grids: Vec<usize>,
-    /// Solver to time (repeatable): verlet, implicit, fast-implicit.
-    #[arg(long = "solver", default_values_t = [SolverKind::Verlet])]
-    solvers: Vec<SolverKind>,
-    /// Worker threads for the Verlet solver (repeatable), e.g. `--threads 1 --threads 2`.
-    #[arg(
-        long = "threads",
-        default_values_t = [1],
-        value_parser = clap::value_parser!(u16).range(1..=256)
-    )]
+    /// Solver to time (repeatable; default: the first of `clothsim solvers`).
+    #[arg(long = "solver")]
+    solvers: Vec<String>,
+    /// Worker threads (repeatable), e.g. `--threads 1 --threads 2`: the `threads` option of
+    /// the solvers that have one (default: theirs).
+    #[arg(long = "threads", value_parser = clap::value_parser!(u16).range(1..=256))]
     threads: Vec<u16>,
     /// Self-collision on or off.
     #[arg(long = "self-collision", value_enum, default_value_t = Switch::On)]
     self_collision: Switch,
-    /// Constraint order of the Verlet solver (repeatable): faithful (the course's), parallel
-    /// (row bands) or colored (spring classes with no shared point; the fastest on big cloths).
-    #[arg(long = "order", value_enum, default_values_t = [Order::Faithful])]
-    orders: Vec<Order>,
+    /// Constraint order (repeatable): the `order` option of the solvers that have one; Verlet's
+    /// are faithful (the course's), parallel (row bands) and colored (spring classes with no
+    /// shared point; the fastest on big cloths). Default: the solver's own.
+    #[arg(long = "order")]
+    orders: Vec<String>,
     /// Frames timed per configuration (after one simulated second of warm-up).
     #[arg(long, default_value_t = 90, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     frames: u32,
@@ -68,84 +66,89 @@ enum Switch {
     Off,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum Order {
-    Faithful,
-    Parallel,
-    Colored,
-}
-
-impl Order {
-    fn name(self) -> &'static str {
-        match self {
-            Order::Faithful => "faithful",
-            Order::Parallel => "parallel",
-            Order::Colored => "colored",
-        }
-    }
-}
-
-/// One configuration to time: the threads and order apply to the Verlet solver only.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// One configuration to time: a solver and its options.
+#[derive(Debug, Clone)]
 struct Config {
-    kind: SolverKind,
-    threads: u16,
-    order: Option<Order>,
+    entry: SolverEntry,
+    /// The options it is built with (a JSON object).
+    options: Value,
 }
 
 impl Config {
     /// Every configuration the options name, in the order given: solvers, then threads, then
-    /// orders (the other solvers have neither).
-    fn all(args: &Args) -> Vec<Self> {
+    /// orders (for the solvers that have those options).
+    fn all(args: &Args, registry: &Registry) -> anyhow::Result<Vec<Self>> {
+        let entries: Vec<SolverEntry> = if args.solvers.is_empty() {
+            registry.default_entry().copied().into_iter().collect()
+        } else {
+            args.solvers
+                .iter()
+                .map(|name| registry.get(name).copied())
+                .collect::<Result<_, _>>()?
+        };
         let mut out = Vec::new();
-        for &kind in &args.solvers {
-            if kind != SolverKind::Verlet {
-                out.push(Config {
-                    kind,
-                    threads: 1,
-                    order: None,
-                });
-                continue;
-            }
-            for &threads in &args.threads {
-                for &order in &args.orders {
-                    out.push(Config {
-                        kind,
-                        threads,
-                        order: Some(order),
-                    });
+        for entry in entries {
+            let threads: Vec<Option<Value>> =
+                if entry.option("threads").is_some() && !args.threads.is_empty() {
+                    args.threads.iter().map(|&t| Some(Value::from(t))).collect()
+                } else {
+                    vec![None]
+                };
+            let orders: Vec<Option<Value>> =
+                if entry.option("order").is_some() && !args.orders.is_empty() {
+                    args.orders
+                        .iter()
+                        .map(|o| Some(Value::from(o.as_str())))
+                        .collect()
+                } else {
+                    vec![None]
+                };
+            for t in &threads {
+                for o in &orders {
+                    let mut options = Map::new();
+                    if let Some(t) = t {
+                        options.insert("threads".to_owned(), t.clone());
+                    }
+                    if let Some(o) = o {
+                        options.insert("order".to_owned(), o.clone());
+                    }
+                    let options = Value::Object(options);
+                    entry.check(&options)?;
+                    out.push(Config { entry, options });
                 }
             }
         }
-        out
+        Ok(out)
     }
 
     /// The solver to time.
-    fn build(self) -> anyhow::Result<Box<dyn Solver>> {
-        let Some(order) = self.order else {
-            return crate::solvers::build(self.kind);
-        };
-        let order = match order {
-            Order::Faithful => ConstraintOrder::Faithful,
-            Order::Parallel => ConstraintOrder::Parallel,
-            Order::Colored => ConstraintOrder::Colored,
-        };
-        let verlet = Verlet::new()
-            .with_threads(usize::from(self.threads))?
-            .with_order(order);
-        Ok(Box::new(verlet))
+    fn build(&self, mesh: &ClothMesh) -> anyhow::Result<Box<dyn Solver>> {
+        Ok(self.entry.build(mesh, &self.options)?)
+    }
+
+    /// The threads it runs on, as the table shows them (1 for a solver without the option).
+    fn threads(&self) -> i64 {
+        if self.entry.option("threads").is_none() {
+            return 1;
+        }
+        self.entry.integer(&self.options, "threads").unwrap_or(1)
+    }
+
+    /// Its constraint order, for a solver with the option.
+    fn order(&self) -> Option<&'static str> {
+        self.entry.option("order")?;
+        self.entry.choice(&self.options, "order").ok()
     }
 
     /// How the configuration is named in errors.
-    fn describe(self, n: usize) -> String {
-        match self.order {
+    fn describe(&self, n: usize) -> String {
+        match self.order() {
             Some(order) => format!(
-                "{} ({} threads, {} order) on the {n} x {n} cloth",
-                self.kind,
-                self.threads,
-                order.name()
+                "{} ({} threads, {order} order) on the {n} x {n} cloth",
+                self.entry.name(),
+                self.threads(),
             ),
-            None => format!("{} on the {n} x {n} cloth", self.kind),
+            None => format!("{} on the {n} x {n} cloth", self.entry.name()),
         }
     }
 }
@@ -168,25 +171,29 @@ struct Row {
 }
 
 /// Times every configuration of the `n x n` cloth, one after the other or in turn.
-fn time_grid(args: &Args, params: &StepParams, n: usize) -> anyhow::Result<Vec<Row>> {
+fn time_grid(
+    args: &Args,
+    configs: &[Config],
+    params: &StepParams,
+    n: usize,
+) -> anyhow::Result<Vec<Row>> {
     let mesh = pinned_grid(n).with_context(|| format!("--grid {n}"))?;
     let run = BenchRun {
         warmup_frames: 90,
         frames: args.frames,
     };
-    let configs = Config::all(args);
     if !args.interleave {
         // One configuration alive at a time: each solver's memory is freed before the next.
         let mut rows = Vec::new();
-        for config in &configs {
-            let mut solver = config.build().with_context(|| config.describe(n))?;
+        for config in configs {
+            let mut solver = config.build(&mesh).with_context(|| config.describe(n))?;
             let mut state = ClothState::new(&mesh);
             let before = CpuTimes::now();
             let result = time_frames(solver.as_mut(), &mesh, &[], params, &mut state, run)
                 .with_context(|| config.describe(n))?;
             rows.push(Row {
                 n,
-                config: *config,
+                config: config.clone(),
                 result,
                 ratio: None,
                 stretch: max_stretch_ratio(&mesh, &state),
@@ -197,7 +204,7 @@ fn time_grid(args: &Args, params: &StepParams, n: usize) -> anyhow::Result<Vec<R
     }
     let mut solvers = configs
         .iter()
-        .map(|c| c.build().with_context(|| c.describe(n)))
+        .map(|c| c.build(&mesh).with_context(|| c.describe(n)))
         .collect::<anyhow::Result<Vec<_>>>()?;
     let mut states: Vec<ClothState> = configs.iter().map(|_| ClothState::new(&mesh)).collect();
     let mut runs: Vec<(&mut dyn Solver, &mut ClothState)> = solvers
@@ -215,7 +222,7 @@ fn time_grid(args: &Args, params: &StepParams, n: usize) -> anyhow::Result<Vec<R
         .zip(&states)
         .map(|((config, t), state)| Row {
             n,
-            config: *config,
+            config: config.clone(),
             result: t.result,
             ratio: Some(t.time_ratio_to_first),
             stretch: max_stretch_ratio(&mesh, state),
@@ -233,14 +240,15 @@ fn steal_since(before: Option<CpuTimes>) -> Option<f64> {
 ///
 /// # Errors
 /// A grid that cannot be built, a solver that is not available, or a diverged run.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let params = StepParams {
         self_collision: args.self_collision == Switch::On,
         ..StepParams::default()
     };
+    let configs = Config::all(args, registry)?;
     let mut rows = Vec::new();
     for &n in &args.grids {
-        rows.extend(time_grid(args, &params, n)?);
+        rows.extend(time_grid(args, &configs, &params, n)?);
     }
     let mut out = String::new();
     if args.json {
@@ -257,10 +265,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                  }| {
                     serde_json::json!({
                         "grid": n,
-                        "solver": config.kind.name(),
-                        "threads": config.threads,
+                        "solver": config.entry.name(),
+                        "options": config.options,
+                        "threads": config.threads(),
                         "self_collision": params.self_collision,
-                        "order": config.order.map(Order::name),
+                        "order": config.order(),
                         "points": r.points,
                         "springs": r.springs,
                         "frames": r.frames,
@@ -308,13 +317,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 out,
                 "{:>7} {:>14} {:>8} {:>10.3} {:>10.3} {:>16.2}M {:>9.2}x {:>9}",
                 format!("{n}x{n}"),
-                config.kind.name(),
-                config.threads,
+                config.entry.name(),
+                config.threads(),
                 r.median_ms_per_frame(),
                 r.ms_per_frame(),
                 r.particle_steps_per_sec() / 1e6,
                 r.realtime_factor(),
-                config.order.map_or("-", Order::name),
+                config.order().unwrap_or("-"),
             );
             if let Some(ratio) = ratio {
                 let _ = write!(out, " {ratio:>8.3}x");

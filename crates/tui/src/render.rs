@@ -14,7 +14,7 @@ use cloth_render::{
     AsciiFrame, Bounds, ColorChoice, ColorDepth, Extent, FrameSize, Mode, RenderError,
     RenderOptions, Renderer, View, ViewSpec,
 };
-use cloth_solver::{SolverKind, advance_frame};
+use cloth_solver::{Registry, advance_frame};
 
 use crate::solvers;
 
@@ -97,9 +97,9 @@ pub struct Args {
     /// Override a scene value: a dotted key and a JSON value, e.g. `cloth.ks=100000`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     sets: Vec<String>,
-    /// The solver (overrides the scene's `simulation.solver`).
+    /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).
     #[arg(long)]
-    solver: Option<SolverKind>,
+    solver: Option<String>,
 }
 
 /// Whether frame `f` (1-based; 0 is the start) of `frames` is printed.
@@ -108,7 +108,7 @@ fn printed(f: u64, frames: u64, every: Option<u64>) -> bool {
 }
 
 /// Runs the command.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let depth = match args.format {
         Format::Plain => ColorDepth::None,
         // The user asked for escapes, so a pipe does not turn them off; NO_COLOR still does.
@@ -119,7 +119,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         ),
     };
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
-    let kind = args.solver.unwrap_or(scene.solver);
+    let choice = solvers::choose(registry, &scene, args.solver.as_deref())?;
     let views = args.view.views();
     let options = RenderOptions {
         mode: args.mode,
@@ -131,7 +131,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     // animation does not jump. The simulation is deterministic, so the second pass replays
     // exactly the same states.
     let mut extent: Option<Bounds> = None;
-    simulate(&scene, kind, args, |_, state| {
+    simulate(&scene, &choice, args, |_, state| {
         let b = Bounds::of_scene(&state.positions, &scene.colliders)?;
         extent = Some(extent.map_or(b, |e| e.union(&b)));
         Ok(())
@@ -146,7 +146,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     let mut first = true;
-    let result = simulate(&scene, kind, args, |_, state| {
+    let result = simulate(&scene, &choice, args, |_, state| {
         for (view, panel) in views.iter().zip(panels.iter_mut()) {
             let spec = ViewSpec {
                 extent: Extent::Fixed(extent),
@@ -184,11 +184,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 /// printed frame.
 fn simulate(
     scene: &cloth_scene::Scene,
-    kind: SolverKind,
+    choice: &solvers::Choice,
     args: &Args,
     mut each: impl FnMut(u64, &ClothState) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
-    let mut solver = solvers::build(kind)?;
+    let mut solver = choice.build(&scene.mesh)?;
     let mut state = ClothState::new(&scene.mesh);
     if printed(0, args.frames, args.every) {
         each(0, &state)?;

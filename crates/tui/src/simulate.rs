@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use cloth_mesh::{ClothMesh, ClothState, vertex_normals};
-use cloth_solver::{SolverKind, advance_frame};
+use cloth_solver::{Registry, advance_frame};
 use serde::Serialize;
 
 use crate::{output, solvers};
@@ -22,9 +22,9 @@ pub struct Args {
     /// Override a scene value: a dotted key and a JSON value, e.g. `cloth.ks=100000`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     sets: Vec<String>,
-    /// The solver (overrides the scene's `simulation.solver`).
+    /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).
     #[arg(long)]
-    solver: Option<SolverKind>,
+    solver: Option<String>,
     /// Where to write the final state: a `.json` file (positions) or a `.obj` file (mesh).
     /// Without it, JSON goes to stdout.
     #[arg(long, value_name = "FILE")]
@@ -47,7 +47,7 @@ enum Format {
 }
 
 /// Runs the command.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     // Decide the output format before spending time simulating.
     let format = match &args.out {
         None => Format::Json,
@@ -66,8 +66,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         },
     };
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
-    let kind = args.solver.unwrap_or(scene.solver);
-    let mut solver = solvers::build(kind)?;
+    let mut solver =
+        solvers::choose(registry, &scene, args.solver.as_deref())?.build(&scene.mesh)?;
     let mut state = ClothState::new(&scene.mesh);
     let params = scene.params;
 

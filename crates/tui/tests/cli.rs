@@ -186,7 +186,7 @@ fn bad_input_is_one_clear_message_and_a_non_zero_exit() {
                 "--solver".into(),
                 "rk4".into(),
             ],
-            "unknown solver",
+            "invalid value 'rk4' for '--solver <SOLVER>'",
         ),
     ];
     for (args, expected) in cases {
@@ -196,6 +196,80 @@ fn bad_input_is_one_clear_message_and_a_non_zero_exit() {
         let e = stderr(&o);
         assert!(e.contains(expected), "{args:?}: {e}");
         assert!(!e.contains("panicked"), "{e}");
+    }
+}
+
+#[test]
+fn solvers_lists_the_registered_solvers_with_their_options() {
+    let o = clothsim(&["solvers"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let names: Vec<&str> = out
+        .lines()
+        .filter(|l| !l.starts_with(' '))
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
+    if cfg!(feature = "implicit") {
+        assert_eq!(names, ["verlet", "implicit", "fast-implicit"], "{out}");
+        assert!(out.contains("  iterations "), "{out}");
+    } else {
+        assert_eq!(names, ["verlet"], "{out}");
+    }
+    assert!(out.contains("  threads "), "{out}");
+}
+
+#[test]
+fn help_pages_list_the_solver_names() {
+    for args in [
+        &["--help"][..],
+        &["tui", "--help"],
+        &["simulate", "--help"],
+        &["render", "--help"],
+        &["bench", "--help"],
+    ] {
+        let o = clothsim(args);
+        assert!(o.status.success(), "{args:?}");
+        let out = String::from_utf8(o.stdout).unwrap();
+        assert!(out.contains("verlet"), "{args:?}: {out}");
+        if cfg!(feature = "implicit") {
+            assert!(out.contains("fast-implicit"), "{args:?}: {out}");
+        }
+    }
+}
+
+#[test]
+fn bad_solver_options_in_a_scene_name_the_key_and_what_is_allowed() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene: serde_json::Value =
+        serde_json::from_str(cloth_scene::bundled("pinned4").unwrap().json).unwrap();
+    let mut cases = vec![
+        (
+            serde_json::json!({"solver": "verlet", "solver_options": {"bogus": 1}}),
+            "simulation.solver_options.bogus: the verlet solver has no option \"bogus\"; its options: threads, order",
+        ),
+        (
+            serde_json::json!({"solver": "rk4"}),
+            "simulation.solver is \"rk4\", but it must be one of the solvers of this clothsim: \"verlet\"",
+        ),
+    ];
+    if cfg!(feature = "implicit") {
+        cases.push((
+            serde_json::json!({"solver": "fast-implicit", "solver_options": {"iterations": 0}}),
+            "simulation.solver_options.iterations: the fast-implicit solver's option iterations is 0, but it must be an integer from 1 to 1000",
+        ));
+    }
+    for (i, (simulation, expected)) in cases.into_iter().enumerate() {
+        let mut s = scene.clone();
+        s["simulation"] = simulation;
+        let path = dir.path().join(format!("s{i}.json"));
+        std::fs::write(&path, s.to_string()).unwrap();
+        let path = path.to_str().unwrap();
+        for command in ["simulate", "render"] {
+            let o = clothsim(&[command, path, "--frames", "1"]);
+            assert_eq!(o.status.code(), Some(1), "{command} {path}");
+            let e = stderr(&o);
+            assert!(e.contains(path) && e.contains(expected), "{e}");
+        }
     }
 }
 

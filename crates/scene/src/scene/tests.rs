@@ -51,7 +51,7 @@ fn set_overrides_reach_the_parameters() {
     assert_eq!(s.params.ks, 100_000.0);
     assert!(!s.params.bending);
     assert_eq!(s.params.gravity, Vec3::new(0.0, -1.6, 0.0));
-    assert_eq!(s.solver, SolverKind::Implicit);
+    assert_eq!(s.solver.as_deref(), Some("implicit"));
 }
 
 #[test]
@@ -168,7 +168,6 @@ fn physical_values_out_of_range_are_rejected() {
             "simulation.frames_per_sec=0",
             "simulation.frames_per_sec is 0",
         ),
-        ("simulation.solver=\"rk4\"", "simulation.solver is \"rk4\""),
     ] {
         let e = err(&[set]);
         assert!(e.contains(key), "{set}: {e}");
@@ -256,10 +255,107 @@ fn saving_an_edited_scene_round_trips() {
     params.steps_per_frame = 60;
     let mut colliders = s.colliders.clone();
     colliders[0].set_friction(0.9);
-    let file = s.to_file(&params, &colliders, SolverKind::Verlet);
+    let file = s.to_file(&params, &colliders, "verlet", &serde_json::json!({}));
     let text = serde_json::to_string_pretty(&file).unwrap();
     let back = parse(&text, "saved.json", &[]).unwrap();
     assert_eq!(back.params, params);
     assert_eq!(back.colliders, colliders);
     assert_eq!(back.mesh, s.mesh);
+}
+
+#[test]
+fn solver_and_options_are_kept_as_written_for_the_application_to_check() {
+    let s = load(
+        "pinned4",
+        &[
+            "simulation.solver=\"anything\"".to_owned(),
+            "simulation.solver_options={\"iterations\": 0, \"bogus\": true}".to_owned(),
+        ],
+    )
+    .unwrap();
+    assert_eq!(s.solver.as_deref(), Some("anything"));
+    assert_eq!(
+        Value::Object(s.solver_options.clone()),
+        serde_json::json!({"iterations": 0, "bogus": true})
+    );
+    let e = err(&["simulation.solver_options=3"]);
+    assert!(e.contains("simulation.solver_options: invalid type"), "{e}");
+}
+
+#[test]
+fn scene_options_belong_to_the_scenes_own_solver() {
+    let with = |sets: &[&str]| {
+        let sets: Vec<String> = sets.iter().map(|s| (*s).to_owned()).collect();
+        load("pinned4", &sets).unwrap()
+    };
+    let s = with(&[
+        "simulation.solver=\"fast-implicit\"",
+        "simulation.solver_options={\"iterations\": 4}",
+    ]);
+    let yes = |_: &str| true;
+    assert_eq!(
+        s.options_for("fast-implicit", "verlet", yes),
+        serde_json::json!({"iterations": 4})
+    );
+    assert_eq!(
+        s.options_for("verlet", "verlet", yes),
+        serde_json::json!({})
+    );
+    // A scene naming no solver gives its options to the default one.
+    let s = with(&["simulation.solver_options={\"threads\": 2}"]);
+    assert_eq!(
+        s.options_for("verlet", "verlet", yes),
+        serde_json::json!({"threads": 2})
+    );
+    assert_eq!(s.options_for("xpbd", "verlet", yes), serde_json::json!({}));
+}
+
+#[test]
+fn the_old_iterations_key_fills_in_the_iterations_option_of_a_solver_that_has_one() {
+    let s = load("pinned4", &["simulation.iterations=7".to_owned()]).unwrap();
+    assert_eq!(s.iterations, Some(7));
+    let has = |k: &str| k == "iterations";
+    let lacks = |_: &str| false;
+    assert_eq!(
+        s.options_for("fast-implicit", "verlet", has),
+        serde_json::json!({"iterations": 7})
+    );
+    assert_eq!(
+        s.options_for("verlet", "verlet", lacks),
+        serde_json::json!({})
+    );
+    // `solver_options` wins over the alias.
+    let s = load(
+        "pinned4",
+        &[
+            "simulation.iterations=7".to_owned(),
+            "simulation.solver=\"fast-implicit\"".to_owned(),
+            "simulation.solver_options={\"iterations\": 3}".to_owned(),
+        ],
+    )
+    .unwrap();
+    assert_eq!(
+        s.options_for("fast-implicit", "verlet", has),
+        serde_json::json!({"iterations": 3})
+    );
+    let e = err(&["simulation.iterations=0"]);
+    assert!(
+        e.contains("simulation.iterations is 0, but it must be an integer from 1 to 1000"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_saved_scene_keeps_its_solver_and_options() {
+    let s = load("pinned4", &[]).unwrap();
+    let options = serde_json::json!({"iterations": 12});
+    let file = s.to_file(&s.params, &s.colliders, "fast-implicit", &options);
+    let text = serde_json::to_string(&file).unwrap();
+    let back = parse(&text, "saved.json", &[]).unwrap();
+    assert_eq!(back.solver.as_deref(), Some("fast-implicit"));
+    assert_eq!(Value::Object(back.solver_options.clone()), options);
+    assert_eq!(back.iterations, None);
+    // No options: no `solver_options` key at all.
+    let file = s.to_file(&s.params, &s.colliders, "verlet", &serde_json::json!({}));
+    assert!(file.simulation.unwrap().solver_options.is_none());
 }

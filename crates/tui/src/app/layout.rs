@@ -4,7 +4,7 @@
 use ratatui::layout::{Constraint, Direction, Layout as Split, Rect};
 
 use super::model::App;
-use super::params::PARAMS;
+use super::params::row_count;
 
 /// The smallest terminal the layout fits, columns.
 pub const MIN_WIDTH: u16 = 60;
@@ -47,7 +47,7 @@ pub fn regions(app: &App, area: Rect) -> Option<Regions> {
     let (mut views, right) = (cols[0], cols[1]);
 
     // Rows, border and the selected parameter's help (two lines) when there is room.
-    let wanted = PARAMS.len() as u16 + 2;
+    let wanted = row_count(&app.sim) as u16 + 2;
     let with_help = wanted + 2;
     let params_h = if right.height >= with_help + 8 {
         with_help

@@ -1,20 +1,26 @@
 //! The one table of live parameters: label, unit, range, steps, how to read and write it.
 //!
 //! The parameter panel, its keys (select, nudge, type a value, restore) and the prompt's
-//! validation all read [`PARAMS`], so adding a parameter is one entry here. Values are shown
+//! validation all read the rows of [`row`]: the fixed [`PARAMS`], then one row per numeric option
+//! of the active solver, made from its registry entry. Adding a parameter is one entry here. Values are shown
 //! and edited in the units of the course's GUI (density in g/cm^2, damping in percent);
 //! `get`/`set` convert to and from the SI units of [`StepParams`].
 
-use cloth_solver::{Collider, StepParams, Vec3};
+use cloth_solver::{Collider, OptionKind, SolverEntry, StepParams, Vec3};
 
-/// Everything a parameter row can read or write: the live step parameters and the collision
-/// objects (whose friction is editable).
+use super::sim::Simulation;
+
+/// Everything a parameter row can read or write: the live step parameters, the collision
+/// objects (whose friction is editable) and the active solver's numeric options.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Settings {
     /// Live step parameters.
     pub params: StepParams,
     /// Live collision objects.
     pub colliders: Vec<Collider>,
+    /// The active solver's numeric options, in its entry's order (see
+    /// [`super::sim::numeric_options`]).
+    pub options: Vec<f64>,
 }
 
 /// How a number moves when nudged.
@@ -49,8 +55,8 @@ pub enum Kind {
     },
     /// On or off; nudging or Enter flips it.
     Toggle,
-    /// The solver: nudging cycles [`cloth_solver::SolverKind::ALL`]. Handled by the update
-    /// function because switching builds a new solver; `get`/`set` are unused.
+    /// The solver: nudging cycles the registry's solvers. Handled by the update function
+    /// because switching builds a new solver; `get`/`set` are unused.
     Solver,
 }
 
@@ -300,22 +306,6 @@ pub const PARAMS: &[Param] = &[
         set: |s, v| s.params.stretch_limit = v != 0.0,
     },
     Param {
-        label: "iterations",
-        unit: "",
-        help: "inner iterations per step of iterative solvers (fast-implicit); Verlet ignores it",
-        kind: Kind::Number {
-            min: 1.0,
-            max: 1000.0,
-            fine: 1.0,
-            coarse: 10.0,
-            scale: Scale::Linear,
-            integer: true,
-            decimals: 0,
-        },
-        get: |s| Some(f64::from(s.params.iterations)),
-        set: |s, v| s.params.iterations = v as u32,
-    },
-    Param {
         label: "solver",
         unit: "",
         help: "the time integrator; switching keeps the cloth's motion",
@@ -324,6 +314,96 @@ pub const PARAMS: &[Param] = &[
         set: |_, _| {},
     },
 ];
+
+/// Readers and writers of the solver's option rows, one per slot of [`Settings::options`]
+/// (plain functions, as every row's are).
+macro_rules! option_slots {
+    ($($i:literal)*) => {
+        const OPTION_GET: &[fn(&Settings) -> Option<f64>] = &[$(|s| s.options.get($i).copied()),*];
+        const OPTION_SET: &[fn(&mut Settings, f64)] = &[$(|s, v| {
+            if let Some(o) = s.options.get_mut($i) {
+                *o = v;
+            }
+        }),*];
+    };
+}
+option_slots!(0 1 2 3 4 5 6 7);
+
+/// The rows of the active solver's numeric options (at most eight; a solver with more shows
+/// its first eight).
+fn option_rows(entry: &SolverEntry) -> impl Iterator<Item = Param> + '_ {
+    entry
+        .options()
+        .iter()
+        .filter(|o| o.numeric().is_some())
+        .zip(OPTION_GET.iter().zip(OPTION_SET))
+        .map(|(o, (&get, &set))| {
+            let (min, max, _) = o.numeric().unwrap_or((0.0, 0.0, 0.0));
+            let integer = matches!(o.kind, OptionKind::Integer { .. });
+            // Ranges over three decades step by ratios, like ks; others by a hundredth of the
+            // range (whole numbers by one).
+            let kind = if min > 0.0 && max / min >= 1000.0 {
+                Kind::Number {
+                    min,
+                    max,
+                    fine: LOG_FINE,
+                    coarse: LOG_COARSE,
+                    scale: Scale::Log,
+                    integer,
+                    decimals: if integer { 0 } else { 3 },
+                }
+            } else if integer {
+                Kind::Number {
+                    min,
+                    max,
+                    fine: 1.0,
+                    coarse: 10.0,
+                    scale: Scale::Linear,
+                    integer,
+                    decimals: 0,
+                }
+            } else {
+                Kind::Number {
+                    min,
+                    max,
+                    fine: (max - min) / 100.0,
+                    coarse: (max - min) / 10.0,
+                    scale: Scale::Linear,
+                    integer,
+                    decimals: 3,
+                }
+            };
+            Param {
+                label: o.name,
+                unit: "",
+                help: o.description,
+                kind,
+                get,
+                set,
+            }
+        })
+}
+
+/// How many rows the panel has for `sim`: [`PARAMS`] and the active solver's numeric options.
+pub fn row_count(sim: &Simulation) -> usize {
+    PARAMS.len() + option_rows(sim.entry()).count()
+}
+
+/// Row `i` of the panel for `sim` (the last row for an `i` past the end).
+pub fn row(sim: &Simulation, i: usize) -> Param {
+    let i = i.min(row_count(sim) - 1);
+    match i.checked_sub(PARAMS.len()) {
+        None => PARAMS[i],
+        Some(k) => option_rows(sim.entry())
+            .nth(k)
+            .unwrap_or(PARAMS[PARAMS.len() - 1]),
+    }
+}
+
+/// Whether row `i` is one of the solver's options (changing it rebuilds the solver).
+pub fn is_option_row(i: usize) -> bool {
+    i >= PARAMS.len()
+}
 
 impl Param {
     /// The value after `presses` nudges (negative = down), clamped to the range. Toggles flip
@@ -423,7 +503,11 @@ impl Param {
             (_, None) | (Kind::Solver, _) => "-".to_owned(),
             (Kind::Toggle, Some(v)) => if v == 0.0 { "off" } else { "on" }.to_owned(),
             (Kind::Number { decimals, .. }, Some(v)) => {
-                if v.abs() >= 1.0e7 {
+                // Large values, and small ones that the fixed decimals would show as zero,
+                // in scientific notation.
+                if v.abs() >= 1.0e7
+                    || (decimals > 0 && v != 0.0 && v.abs() < 0.1_f64.powi(decimals as i32))
+                {
                     format!("{v:.3e}")
                 } else {
                     format!("{v:.decimals$}")
@@ -450,6 +534,7 @@ mod tests {
         Settings {
             params: StepParams::default(),
             colliders: Vec::new(),
+            options: Vec::new(),
         }
     }
 

@@ -7,10 +7,11 @@ use std::collections::VecDeque;
 
 use cloth_mesh::ClothState;
 use cloth_scene::Scene;
-use cloth_solver::{Solver, SolverKind, kinetic_energy, max_stretch_ratio};
+use cloth_solver::{Registry, Solver, SolverEntry, kinetic_energy, max_stretch_ratio};
+use serde_json::Value;
 
 use super::params::Settings;
-use crate::solvers;
+use crate::solvers::{self, Choice};
 
 /// Plot samples kept (one per simulated frame: 20 s at 90 frames/s).
 pub const HISTORY: usize = 1800;
@@ -59,8 +60,10 @@ pub struct Simulation {
     /// The state at the end of the last good frame, shown after a failure.
     last_good: ClothState,
     solver: Box<dyn Solver>,
-    /// The active solver.
-    pub solver_kind: SolverKind,
+    /// The solvers the user can switch between.
+    registry: Registry,
+    /// The active solver's entry and the options it was built with.
+    choice: Choice,
     /// Simulated seconds since the start or the last reset.
     pub time: f64,
     /// Steps since the start or the last reset.
@@ -78,17 +81,18 @@ pub struct Simulation {
 }
 
 impl Simulation {
-    /// Starts `scene` with `solver` (or the scene's own), at rest.
+    /// Starts `scene` with the solver `name` of `registry` (or the scene's own), at rest.
     ///
     /// # Errors
-    /// When the solver is not built into this binary.
-    pub fn new(scene: Scene, solver: Option<SolverKind>) -> anyhow::Result<Self> {
-        let kind = solver.unwrap_or(scene.solver);
-        let built = solvers::build(kind)?;
+    /// When the solver is not registered or refuses the scene's options for it.
+    pub fn new(scene: Scene, registry: Registry, name: Option<&str>) -> anyhow::Result<Self> {
+        let choice = solvers::choose(&registry, &scene, name)?;
+        let built = choice.build(&scene.mesh)?;
         let state = ClothState::new(&scene.mesh);
         let settings = Settings {
             params: scene.params,
             colliders: scene.colliders.clone(),
+            options: numeric_options(&choice.entry, &choice.options),
         };
         let mut sim = Self {
             last_good: state.clone(),
@@ -96,7 +100,8 @@ impl Simulation {
             settings,
             scene,
             solver: built,
-            solver_kind: kind,
+            registry,
+            choice,
             time: 0.0,
             steps: 0,
             frames: 0,
@@ -109,11 +114,44 @@ impl Simulation {
         Ok(sim)
     }
 
-    /// The scene's own settings, for "restore".
+    /// The scene's own settings, for "restore": its parameters, objects and the options it
+    /// gives the active solver.
     pub fn scene_settings(&self) -> Settings {
+        let entry = &self.choice.entry;
+        let default = self.registry.default_entry().map_or("", SolverEntry::name);
+        let options = self
+            .scene
+            .options_for(entry.name(), default, |k| entry.option(k).is_some());
         Settings {
             params: self.scene.params,
             colliders: self.scene.colliders.clone(),
+            options: numeric_options(entry, &options),
+        }
+    }
+
+    /// The solvers the user can switch between.
+    pub fn registry(&self) -> &Registry {
+        &self.registry
+    }
+
+    /// The active solver's entry.
+    pub fn entry(&self) -> &SolverEntry {
+        &self.choice.entry
+    }
+
+    /// The active solver's options, a JSON object.
+    pub fn options(&self) -> &Value {
+        &self.choice.options
+    }
+
+    /// The name of the solver the scene asks for (the registry's first when it names none).
+    pub fn scene_solver(&self) -> &str {
+        match &self.scene.solver {
+            Some(name) => match self.registry.get(name) {
+                Ok(entry) => entry.name(),
+                Err(_) => name,
+            },
+            None => self.registry.default_entry().map_or("", SolverEntry::name),
         }
     }
 
@@ -127,14 +165,50 @@ impl Simulation {
         self.scene.mesh.point_mass(self.settings.params.density)
     }
 
-    /// Replaces the solver; the state (and so the motion) carries over.
+    /// Replaces the solver by the registered one called `name`, with the options the scene
+    /// gives it; the state (and so the motion) carries over.
     ///
     /// # Errors
-    /// When `kind` is not built into this binary; the current solver stays.
-    pub fn set_solver(&mut self, kind: SolverKind) -> anyhow::Result<()> {
-        self.solver = solvers::build(kind)?;
-        self.solver_kind = kind;
+    /// When `name` is not registered or the solver cannot be built; the current solver stays.
+    pub fn set_solver(&mut self, name: &str) -> anyhow::Result<()> {
+        let choice = solvers::choose(&self.registry, &self.scene, Some(name))?;
+        self.solver = choice.build(&self.scene.mesh)?;
+        self.settings.options = numeric_options(&choice.entry, &choice.options);
+        self.choice = choice;
         Ok(())
+    }
+
+    /// Rebuilds the active solver with the numeric options of [`Self::settings`] (its other
+    /// options kept); the state carries over. A solver owns only caches, so this is a swap.
+    ///
+    /// # Errors
+    /// When the solver refuses the options; the current solver and options stay.
+    pub fn apply_options(&mut self) -> anyhow::Result<()> {
+        let entry = self.choice.entry;
+        let mut options = self.choice.options.as_object().cloned().unwrap_or_default();
+        let numeric = entry.options().iter().filter(|o| o.numeric().is_some());
+        for (o, &v) in numeric.zip(&self.settings.options) {
+            let value = match o.kind {
+                cloth_solver::OptionKind::Integer { .. } => Value::from(v.round() as i64),
+                _ => Value::from(v),
+            };
+            options.insert(o.name.to_owned(), value);
+        }
+        let choice = Choice {
+            entry,
+            options: Value::Object(options),
+        };
+        match choice.build(&self.scene.mesh) {
+            Ok(solver) => {
+                self.solver = solver;
+                self.choice = choice;
+                Ok(())
+            }
+            Err(e) => {
+                self.settings.options = numeric_options(&entry, &self.choice.options);
+                Err(e)
+            }
+        }
     }
 
     /// Back to the start positions at rest, keeping the live settings (the course's R key).
@@ -257,21 +331,40 @@ impl Simulation {
         fault
     }
 
-    /// A warning when the live settings are past the explicit solver's stability limit.
+    /// A warning when the live settings are past an explicit solver's stability limit.
     pub fn stability_warning(&self) -> Option<String> {
-        if self.solver_kind != SolverKind::Verlet {
+        if !self.choice.entry.is_explicit() {
             return None;
         }
         let p = &self.settings.params;
         let limit = p.explicit_ks_limit(self.point_mass());
         (p.ks > limit).then(|| {
             format!(
-                "ks {:.0} N/m is past Verlet's stability limit of about {limit:.0} N/m at this density \
-                 and step: expect it to blow up; lower ks, raise steps/frame or density",
-                p.ks
+                "ks {:.0} N/m is past the {} solver's stability limit of about {limit:.0} N/m at this \
+                 density and step: expect it to blow up; lower ks, raise steps/frame or density",
+                p.ks,
+                self.choice.entry.name()
             )
         })
     }
+}
+
+/// The values of `entry`'s numeric options in `options` (their defaults where absent), in the
+/// entry's order: what the parameter panel shows as the solver's rows.
+pub fn numeric_options(entry: &SolverEntry, options: &Value) -> Vec<f64> {
+    entry
+        .options()
+        .iter()
+        .filter_map(|o| {
+            let (_, _, default) = o.numeric()?;
+            Some(
+                options
+                    .get(o.name)
+                    .and_then(Value::as_f64)
+                    .unwrap_or(default),
+            )
+        })
+        .collect()
 }
 
 /// A possibly huge number, readable: `123`, `4.6e12`.

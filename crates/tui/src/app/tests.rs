@@ -21,7 +21,7 @@ fn app_with(scene: &str, paused: bool) -> App {
         paused,
         ..Args::default()
     };
-    let mut app = build(&args, false).unwrap();
+    let mut app = build(&args, &crate::default_registry(), false).unwrap();
     app.cwd = PathBuf::from("/nonexistent");
     app
 }
@@ -240,18 +240,50 @@ fn a_diverging_run_pauses_shows_the_last_good_frame_and_resets() {
 }
 
 #[test]
-fn a_solver_that_is_not_built_in_is_refused_with_a_message() {
+fn the_solver_row_cycles_through_the_registry_and_shows_the_new_solvers_options() {
     let mut app = app_with("pinned4", true);
+    let names: Vec<&str> = app.sim.registry().names().collect();
     select(&mut app, "solver");
-    press(&mut app, KeyCode::Right);
-    let built_in = crate::solvers::build(cloth_solver::SolverKind::Implicit).is_ok();
-    if built_in {
-        assert_ne!(app.sim.solver_kind, cloth_solver::SolverKind::Verlet);
-    } else {
-        assert_eq!(app.sim.solver_kind, cloth_solver::SolverKind::Verlet);
-        let note = app.note.clone().unwrap().text;
-        assert!(note.contains("not built into this clothsim"), "{note}");
+    assert_eq!(app.sim.entry().name(), names[0]);
+    for expected in names.iter().cycle().skip(1).take(names.len()) {
+        press(&mut app, KeyCode::Right);
+        assert_eq!(app.sim.entry().name(), *expected);
+        // One row per numeric option of the active solver, after the fixed rows.
+        let numeric = app
+            .sim
+            .entry()
+            .options()
+            .iter()
+            .filter(|o| o.numeric().is_some())
+            .count();
+        assert_eq!(super::params::row_count(&app.sim), PARAMS.len() + numeric);
+        assert_eq!(app.sim.settings.options.len(), numeric);
     }
+}
+
+#[cfg(feature = "implicit")]
+#[test]
+fn editing_a_solver_option_row_rebuilds_the_solver_with_it() {
+    let args = Args {
+        scene: "pinned4".to_owned(),
+        solver: Some("fast-implicit".to_owned()),
+        paused: true,
+        ..Args::default()
+    };
+    let mut app = build(&args, &crate::default_registry(), false).unwrap();
+    let at = PARAMS.len();
+    assert_eq!(super::params::row(&app.sim, at).label, "iterations");
+    while app.selected != at {
+        press(&mut app, KeyCode::Down);
+    }
+    assert_eq!(app.sim.settings.options, vec![10.0]);
+    press(&mut app, KeyCode::Right);
+    assert_eq!(app.sim.settings.options, vec![11.0]);
+    assert_eq!(app.sim.options(), &serde_json::json!({"iterations": 11}));
+    assert!(app.sim.step_frame().is_ok());
+    // Restoring the row goes back to the scene's value (the solver's default here).
+    press(&mut app, KeyCode::Char('u'));
+    assert_eq!(app.sim.options(), &serde_json::json!({"iterations": 10}));
 }
 
 #[test]

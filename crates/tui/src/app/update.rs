@@ -3,13 +3,12 @@
 use std::path::PathBuf;
 
 use cloth_render::{Mode, Orbit, View};
-use cloth_solver::SolverKind;
 use ratatui::layout::{Position, Rect};
 
 use super::layout;
 use super::message::Message;
 use super::model::{App, Layout, Level, Overlay, Picker, Prompt, Purpose, RATES};
-use super::params::{Kind, PARAMS};
+use super::params::{Kind, is_option_row, row, row_count};
 use super::sim::Simulation;
 use crate::output;
 
@@ -47,9 +46,12 @@ pub fn update(app: &mut App, msg: Message) {
             app.say(Level::Info, text);
         }
         Message::SelectPrev => {
-            app.selected = app.selected.checked_sub(1).unwrap_or(PARAMS.len() - 1);
+            app.selected = app
+                .selected
+                .checked_sub(1)
+                .unwrap_or(row_count(&app.sim) - 1);
         }
-        Message::SelectNext => app.selected = (app.selected + 1) % PARAMS.len(),
+        Message::SelectNext => app.selected = (app.selected + 1) % row_count(&app.sim),
         Message::Nudge { dir, coarse } => nudge(app, dir, coarse),
         Message::EditValue => edit_value(app),
         Message::RestoreParam => restore(app, false),
@@ -285,7 +287,7 @@ fn reset(app: &mut App) {
 }
 
 fn nudge(app: &mut App, dir: i32, coarse: bool) {
-    let p = &PARAMS[app.selected];
+    let p = row(&app.sim, app.selected);
     if p.kind == Kind::Solver {
         cycle_solver(app, dir);
         return;
@@ -305,8 +307,14 @@ fn absent(label: &str) -> String {
 }
 
 /// After a parameter changed: say its new value, or warn.
-fn changed(app: &mut App, row: usize) {
-    let p = &PARAMS[row];
+fn changed(app: &mut App, at: usize) {
+    let p = row(&app.sim, at);
+    if is_option_row(at)
+        && let Err(e) = app.sim.apply_options()
+    {
+        app.say(Level::Warn, format!("{e:#}"));
+        return;
+    }
     let shown = p.format((p.get)(&app.sim.settings));
     if let Some(w) = app.sim.stability_warning() {
         app.say(Level::Warn, w);
@@ -321,18 +329,23 @@ fn changed(app: &mut App, row: usize) {
 }
 
 fn cycle_solver(app: &mut App, dir: i32) {
-    let all = SolverKind::ALL;
+    let all: Vec<&'static str> = app.sim.registry().names().collect();
     let n = all.len() as i64;
-    let at = all
-        .iter()
-        .position(|&k| k == app.sim.solver_kind)
-        .unwrap_or(0) as i64;
+    let current = app.sim.entry().name();
+    let at = all.iter().position(|&k| k == current).unwrap_or(0) as i64;
     let mut refused = Vec::new();
     for i in 1..n {
-        let kind = all[(at + i * i64::from(dir.signum())).rem_euclid(n) as usize];
-        match app.sim.set_solver(kind) {
+        let name = all[(at + i * i64::from(dir.signum())).rem_euclid(n) as usize];
+        match app.sim.set_solver(name) {
             Ok(()) => {
-                let mut text = format!("solver: {kind} ({})", kind.description());
+                app.selected = app.selected.min(row_count(&app.sim) - 1);
+                let entry = app.sim.entry();
+                let steps = entry.steps_per_frame();
+                let mut text = format!(
+                    "solver: {name} ({}; meant for {steps} step{} per frame)",
+                    entry.description(),
+                    if steps == 1 { "" } else { "s" }
+                );
                 if let Some(first) = refused.first() {
                     text = format!("{text}; skipped: {first}");
                 }
@@ -349,14 +362,14 @@ fn cycle_solver(app: &mut App, dir: i32) {
         Level::Warn,
         format!(
             "staying with {}: {}",
-            app.sim.solver_kind,
+            app.sim.entry().name(),
             refused.join("; ")
         ),
     );
 }
 
 fn edit_value(app: &mut App) {
-    let p = &PARAMS[app.selected];
+    let p = row(&app.sim, app.selected);
     match p.kind {
         Kind::Solver => cycle_solver(app, 1),
         Kind::Toggle => nudge(app, 1, false),
@@ -375,12 +388,16 @@ fn restore(app: &mut App, all: bool) {
     let scene = app.sim.scene_settings();
     if all {
         app.sim.settings = scene;
-        if app.sim.solver_kind != app.sim.scene.solver {
-            let kind = app.sim.scene.solver;
-            if let Err(e) = app.sim.set_solver(kind) {
-                app.say(Level::Warn, format!("{e:#}"));
-                return;
-            }
+        let wanted = app.sim.scene_solver().to_owned();
+        let result = if app.sim.entry().name() == wanted {
+            app.sim.apply_options()
+        } else {
+            app.sim.set_solver(&wanted)
+        };
+        app.selected = app.selected.min(row_count(&app.sim) - 1);
+        if let Err(e) = result {
+            app.say(Level::Warn, format!("{e:#}"));
+            return;
         }
         app.say(
             Level::Info,
@@ -388,12 +405,15 @@ fn restore(app: &mut App, all: bool) {
         );
         return;
     }
-    let p = &PARAMS[app.selected];
+    let p = row(&app.sim, app.selected);
     match p.kind {
         Kind::Solver => {
-            let kind = app.sim.scene.solver;
-            match app.sim.set_solver(kind) {
-                Ok(()) => app.say(Level::Info, format!("solver restored: {kind}")),
+            let wanted = app.sim.scene_solver().to_owned();
+            match app.sim.set_solver(&wanted) {
+                Ok(()) => {
+                    app.selected = app.selected.min(row_count(&app.sim) - 1);
+                    app.say(Level::Info, format!("solver restored: {wanted}"));
+                }
                 Err(e) => app.say(Level::Warn, format!("{e:#}")),
             }
         }
@@ -509,11 +529,11 @@ fn submit(app: &mut App) {
     }
 }
 
-fn submit_value(app: &mut App, row: usize, text: &str) -> Result<(), String> {
-    let p = &PARAMS[row];
+fn submit_value(app: &mut App, at: usize, text: &str) -> Result<(), String> {
+    let p = row(&app.sim, at);
     let v = p.parse(text)?;
     (p.set)(&mut app.sim.settings, v);
-    changed(app, row);
+    changed(app, at);
     Ok(())
 }
 
@@ -558,7 +578,8 @@ fn save(app: &mut App, path: &std::path::Path) -> anyhow::Result<()> {
     let file = sim.scene.to_file(
         &sim.settings.params,
         &sim.settings.colliders,
-        sim.solver_kind,
+        sim.entry().name(),
+        sim.options(),
     );
     let mut text = serde_json::to_string_pretty(&file)?;
     text.push('\n');
@@ -593,17 +614,27 @@ fn open_scene(app: &mut App, name: &str) {
 }
 
 fn replace_scene(app: &mut App, scene: cloth_scene::Scene) {
-    let wanted = scene.solver;
-    let result = Simulation::new(scene.clone(), None).or_else(|e| {
-        // The scene asks for a solver this binary lacks: run it with Verlet and say so.
-        app.say(Level::Warn, format!("{e:#}; using verlet"));
-        Simulation::new(scene, Some(SolverKind::Verlet))
+    let registry = app.sim.registry().clone();
+    let mut fallback = false;
+    let result = Simulation::new(scene.clone(), registry.clone(), None).or_else(|e| {
+        // The scene asks for a solver this binary lacks, or gives it options it refuses: run
+        // it with the default solver at its defaults and say so.
+        let default = registry
+            .default_entry()
+            .map_or("", cloth_solver::SolverEntry::name);
+        app.say(Level::Warn, format!("{e:#}; using {default}"));
+        fallback = true;
+        let mut plain = scene;
+        plain.solver = None;
+        plain.solver_options.clear();
+        plain.iterations = None;
+        Simulation::new(plain, registry, None)
     });
     match result {
         Ok(sim) => {
-            let fallback = sim.solver_kind != wanted;
             app.orbit = Orbit::course_default(&sim.scene.mesh);
             app.sim = sim;
+            app.selected = app.selected.min(row_count(&app.sim) - 1);
             app.extent = None;
             app.debt = 0.0;
             app.frames = [None, None, None, None];

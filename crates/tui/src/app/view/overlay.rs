@@ -10,7 +10,7 @@ use ratatui::widgets::{Block, Clear, Paragraph, Wrap};
 use crate::app::keymap::{Group, KEYMAP, keys_label};
 use crate::app::layout::{MIN_HEIGHT, MIN_WIDTH};
 use crate::app::model::{App, Picker, Prompt, Purpose};
-use crate::app::params::{Kind, PARAMS, fmt_number};
+use crate::app::params::{Kind, fmt_number, row};
 use crate::app::theme::Theme;
 
 /// A box of `w` x `h` centred in `area` (clipped to it), cleared and bordered.
@@ -171,8 +171,8 @@ pub fn picker(f: &mut Frame, area: Rect, p: &Picker, theme: &Theme) {
 /// A text prompt with its question, the text (cursor shown reversed) and any refusal.
 pub fn prompt(app: &App, f: &mut Frame, area: Rect, p: &Prompt, theme: &Theme) {
     let (title, question) = match p.purpose {
-        Purpose::Value(row) => {
-            let param = &PARAMS[row];
+        Purpose::Value(at) => {
+            let param = row(&app.sim, at);
             let range = match param.kind {
                 Kind::Number { min, max, .. } => format!(
                     "{}: a value from {} to {} {}",

@@ -1,4 +1,4 @@
-//! The parameter panel, drawn from [`PARAMS`].
+//! The parameter panel, drawn from the rows of [`row`].
 
 use ratatui::Frame;
 use ratatui::layout::Rect;
@@ -6,7 +6,7 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Paragraph, Wrap};
 
 use crate::app::model::App;
-use crate::app::params::{Kind, PARAMS};
+use crate::app::params::{Kind, row, row_count};
 use crate::app::theme::Theme;
 
 /// Width of the label column.
@@ -21,7 +21,8 @@ pub fn params(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
         .title_bottom(Line::styled(" * edited  ! unstable ", theme.dim).right_aligned());
     let inside = block.inner(area);
     f.render_widget(block, area);
-    let rows = PARAMS.len() as u16;
+    let count = row_count(&app.sim);
+    let rows = count as u16;
     let (list_h, help_h) = if inside.height >= rows + 2 {
         (rows, inside.height - rows)
     } else {
@@ -35,12 +36,13 @@ pub fn params(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     let unstable = app.sim.stability_warning().is_some();
     let value_w = (inside.width as usize).saturating_sub(LABEL + 2 + 7).max(4);
     let mut lines = Vec::with_capacity(list_h as usize);
-    for (i, p) in PARAMS.iter().enumerate().skip(first).take(list_h as usize) {
+    for i in (0..count).skip(first).take(list_h as usize) {
+        let p = row(&app.sim, i);
         let (value, unit, edited) = if p.kind == Kind::Solver {
             (
-                app.sim.solver_kind.name().to_owned(),
+                app.sim.entry().name().to_owned(),
                 "",
-                app.sim.solver_kind != app.sim.scene.solver,
+                app.sim.entry().name() != app.sim.scene_solver(),
             )
         } else {
             let v = (p.get)(&app.sim.settings);
@@ -80,7 +82,7 @@ pub fn params(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
             height: help_h - 1,
             ..inside
         };
-        let text = PARAMS[app.selected].help;
+        let text = row(&app.sim, app.selected).help;
         let w = usize::from(help.width);
         // One line only: cut it visibly rather than mid-phrase.
         let text = if help.height == 1 && text.chars().count() > w {

@@ -33,7 +33,10 @@ pub fn title(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
             8,
             Span::styled(format!(" {} ", sim.scene.origin), theme.text),
         ),
-        (4, Span::styled(format!(" {} ", sim.solver_kind), theme.dim)),
+        (
+            4,
+            Span::styled(format!(" {} ", sim.entry().name()), theme.dim),
+        ),
         (10, Span::styled(format!(" {state}"), style)),
         (10, Span::styled(format!(" {rate} "), theme.text)),
         (

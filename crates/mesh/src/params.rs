@@ -1,9 +1,13 @@
 //! The live-editable parameters of a run.
 
-use cloth_mesh::{SpringKind, Vec3};
+use crate::{SpringKind, Vec3};
 
 /// Every parameter that may change between two steps, in one `Copy` struct (rapier's
 /// `IntegrationParameters`). Defaults are the course's.
+///
+/// These are the model's parameters, which every solver reads. A solver's own settings (an
+/// iteration count, a thread count) are its options, given to its constructor (see
+/// `cloth_solver::SolverEntry`).
 ///
 /// Units are SI. The course's GUI shows density in g/cm^2 (the file's kg/m^2 divided by 10) and
 /// damping in percent; this struct keeps the file's units and leaves display to the UI.
@@ -35,9 +39,6 @@ pub struct StepParams {
     pub self_collision: bool,
     /// Whether the 10 % maximum-stretch constraint applies (default true, the course's model).
     pub stretch_limit: bool,
-    /// Inner iterations per step for iterative solvers such as fast-implicit (default 10);
-    /// ignored by Verlet.
-    pub iterations: u32,
 }
 
 impl Default for StepParams {
@@ -54,7 +55,6 @@ impl Default for StepParams {
             frames_per_sec: 90.0,
             self_collision: true,
             stretch_limit: true,
-            iterations: 10,
         }
     }
 }
@@ -174,13 +174,6 @@ impl StepParams {
                 "frames_per_sec",
                 self.frames_per_sec.to_string(),
                 "a number > 0 and <= 10000",
-            );
-        }
-        if self.iterations == 0 || self.iterations > 1000 {
-            return bad(
-                "iterations",
-                self.iterations.to_string(),
-                "an integer from 1 to 1000",
             );
         }
         Ok(())

@@ -1,6 +1,6 @@
 //! Collision objects: the course's sphere and plane, with friction.
 
-use cloth_mesh::Vec3;
+use crate::Vec3;
 
 /// How far above a plane a colliding point is put back, metres (the course's `SURFACE_OFFSET`).
 pub const SURFACE_OFFSET: f64 = 1e-4;

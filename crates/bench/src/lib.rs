@@ -1,15 +1,16 @@
-//! Timing a solver frame by frame: the engine of `clothsim bench`.
+//! Timing a solver frame by frame: the engine of `clothsim bench` and of the solvers' benches.
 //!
-//! Criterion benches (`benches/`) are the measurement of record; this module gives the binary a
+//! Criterion benches (`benches/`) are the measurement of record; this crate gives the binary a
 //! quick, dependency-free way to print ms per frame, particle-steps per second and the real-time
-//! factor for any solver behind the [`Solver`] trait. Wall-clock time is read here, between
-//! frames, never inside a solver.
+//! factor for any solver behind the [`Solver`] trait, and gives benches and tests the course's
+//! cloth at any size ([`pinned_grid`]). Wall-clock time is read here, between frames, never
+//! inside a solver. It is a tool of the workspace, not part of any solver's API.
 
 use std::time::Instant;
 
 use cloth_mesh::{ClothMesh, ClothState, GridSpec, MeshError, Orientation};
 
-use crate::{Collider, SolveError, Solver, StepParams, advance_frame};
+use cloth_solver::{Collider, SolveError, Solver, StepParams, advance_frame};
 
 /// How long to run a benchmark.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -252,14 +253,16 @@ mod tests {
             frames: 3,
         };
         let mut alone = [ClothState::new(&mesh), ClothState::new(&mesh)];
-        let mut verlet = crate::Verlet::new();
-        let mut parallel = crate::Verlet::new().with_order(crate::ConstraintOrder::Parallel);
+        let mut verlet = cloth_solver::Verlet::new();
+        let mut parallel =
+            cloth_solver::Verlet::new().with_order(cloth_solver::ConstraintOrder::Parallel);
         time_frames(&mut verlet, &mesh, &[], &params, &mut alone[0], run).unwrap();
         time_frames(&mut parallel, &mesh, &[], &params, &mut alone[1], run).unwrap();
 
         let (mut a, mut b) = (ClothState::new(&mesh), ClothState::new(&mesh));
-        let mut verlet = crate::Verlet::new();
-        let mut parallel = crate::Verlet::new().with_order(crate::ConstraintOrder::Parallel);
+        let mut verlet = cloth_solver::Verlet::new();
+        let mut parallel =
+            cloth_solver::Verlet::new().with_order(cloth_solver::ConstraintOrder::Parallel);
         let mut runs: Vec<(&mut dyn Solver, &mut ClothState)> =
             vec![(&mut verlet, &mut a), (&mut parallel, &mut b)];
         let timed = time_interleaved(&mut runs, &mesh, &[], &params, run).unwrap();
@@ -280,8 +283,8 @@ mod tests {
     fn an_interleaved_run_that_fails_is_named_by_its_index() {
         let mesh = pinned_grid(6).unwrap();
         let params = StepParams::default();
-        let mut good = crate::Verlet::new();
-        let mut bad = crate::Verlet::new();
+        let mut good = cloth_solver::Verlet::new();
+        let mut bad = cloth_solver::Verlet::new();
         let (mut a, mut b) = (ClothState::new(&mesh), ClothState::new(&mesh));
         // A non-finite position makes the second run's first step fail.
         b.positions[7].x = f64::NAN;

@@ -1,0 +1,75 @@
+//! `clothsim`, the CS184 mass-spring cloth in the terminal, as a library: the whole application
+//! (command line, live UI, `simulate`, `render`, `bench`, `scenes`, `solvers`) runs with any
+//! [`Registry`] of solvers.
+//!
+//! The `clothsim` binary is [`run`] with [`default_registry`]. A solver crate written elsewhere
+//! builds its own clothsim by adding its entry:
+//!
+//! ```no_run
+//! use std::process::ExitCode;
+//!
+//! fn main() -> ExitCode {
+//!     let registry = cloth_tui::default_registry(); // .with(my_solver::MySolver::ENTRY)
+//!     cloth_tui::run(&registry)
+//! }
+//! ```
+//!
+//! Every name the application lists or checks (the `--solver` values and their help, a scene's
+//! `simulation.solver`, the UI's solver row, `clothsim solvers`) comes from the registry. Every
+//! error ends as one clear message on stderr and a non-zero exit code; nothing here panics on
+//! bad input.
+
+mod app;
+mod bench;
+mod cli;
+mod output;
+mod render;
+mod scenes;
+mod simulate;
+mod solvers;
+mod steal;
+
+use std::ffi::OsString;
+use std::process::ExitCode;
+
+pub use cloth_solver::{Registry, SolverEntry};
+pub use solvers::default_registry;
+
+/// Runs clothsim with the process's command line and the solvers of `registry`, returning the
+/// exit code: success, 1 for an error (printed to stderr as one message), 2 for a command line
+/// that does not parse (with clap's explanation).
+pub fn run(registry: &Registry) -> ExitCode {
+    run_from(registry, std::env::args_os())
+}
+
+/// Runs clothsim with the command line `args` (the program name first) and the solvers of
+/// `registry`; see [`run`].
+pub fn run_from<I, T>(registry: &Registry, args: I) -> ExitCode
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    let program = args
+        .first()
+        .and_then(|a| std::path::Path::new(a).file_stem())
+        .map_or_else(
+            || "clothsim".to_owned(),
+            |s| s.to_string_lossy().into_owned(),
+        );
+    let cli = match cli::parse(registry, args) {
+        Ok(cli) => cli,
+        Err(e) => {
+            // Help and version are "errors" to clap that print to stdout and succeed.
+            let _ = e.print();
+            return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
+        }
+    };
+    match cli.run(registry) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("{program}: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,214 @@
+//! XPBD for the CS184 mass-spring cloth: a solver crate written only against clothsim's public
+//! APIs, as an outside author would write one.
+//!
+//! # Method
+//!
+//! Extended position-based dynamics (Macklin, Müller and Chentanez 2016, "XPBD: Position-Based
+//! Simulation of Compliant Constrained Dynamics"). Each spring of the course's model is a
+//! distance constraint `C = |x_a - x_b| - L` with the compliance `alpha = 1 / k` of the spring it
+//! replaces (`k = ks` for structural and shearing springs, `0.2 ks` for bending ones; a disabled
+//! kind, or `ks = 0`, is no constraint at all). One step of `dt = params.dt()`:
+//!
+//! 1. prediction, with the course's velocity damping and gravity as the only external force:
+//!    `p = x + (1 - d/100)(x - x_last) + g dt^2` for unpinned points, `p = x` for pinned ones;
+//! 2. `iterations` Gauss-Seidel sweeps over the springs in the course's order, each spring with
+//!    its multiplier `lambda` (zero at the start of the step) and `alpha~ = alpha / dt^2`:
+//!    `dlambda = (-C - alpha~ lambda) / (w_a + w_b + alpha~)`, `lambda += dlambda`,
+//!    `p_a += w_a dlambda n`, `p_b -= w_b dlambda n`, with `w = 1/m` (0 when pinned) and `n`
+//!    the unit vector from `b` to `a`;
+//! 3. self-collision through the shared [`SpatialHash`], the collision objects
+//!    ([`apply_colliders`]) and the course's 10 % stretch limit ([`limit_stretch`]), each when
+//!    the parameters ask for it, as the reference solver does;
+//! 4. `x_last = x`, `x = p`.
+//!
+//! # Properties
+//!
+//! The multipliers make the stiffness independent of the iteration count and the step (PBD's
+//! flaw): at a static equilibrium `C = -alpha~ lambda` with the constraint force
+//! `lambda / dt^2`, which is Hooke's law `f = -k C`, so a hanging spring stretches by `m g / k`
+//! as the mass-spring model says. With few iterations the sweep does not converge and the cloth
+//! looks softer and more damped, never unstable: every update moves points towards satisfying
+//! a constraint, so large steps (one per frame) stay bounded.
+
+use cloth_solver::{
+    ClothMesh, ClothState, Collider, MAX_STRETCH, OptionError, OptionKind, SolveError, Solver,
+    SolverEntry, SolverOption, SpatialHash, StepParams, StepReport, Vec3, apply_colliders,
+    limit_stretch,
+};
+use serde_json::Value;
+
+/// Gauss-Seidel sweeps per step of [`Xpbd::new`].
+pub const DEFAULT_ITERATIONS: u32 = 10;
+
+/// The XPBD solver. Owns only scratch memory: the multipliers and the predicted positions of
+/// the step under way, and the self-collision hash.
+#[derive(Debug, Default, Clone)]
+pub struct Xpbd {
+    iterations: u32,
+    /// One multiplier per spring, N s^2, reset each step.
+    lambda: Vec<f64>,
+    /// The predicted, then corrected, positions of the step.
+    predicted: Vec<Vec3>,
+    hash: SpatialHash,
+}
+
+impl Xpbd {
+    /// The registry entry: `xpbd`, 5 steps per frame, option `iterations`.
+    pub const ENTRY: SolverEntry = SolverEntry::new(
+        "xpbd",
+        "XPBD (Macklin et al. 2016): springs as compliant distance constraints, Gauss-Seidel",
+        build,
+    )
+    .with_steps_per_frame(5)
+    .with_options(&[SolverOption {
+        name: "iterations",
+        description: "Gauss-Seidel sweeps over the springs per step: more is stiffer",
+        kind: OptionKind::Integer {
+            min: 1,
+            max: 1000,
+            default: DEFAULT_ITERATIONS as i64,
+        },
+    }]);
+
+    /// A solver doing [`DEFAULT_ITERATIONS`] sweeps per step.
+    #[must_use]
+    pub fn new() -> Self {
+        Self::with_iterations(DEFAULT_ITERATIONS)
+    }
+
+    /// A solver doing `iterations` sweeps per step (0 counts as 1).
+    #[must_use]
+    pub fn with_iterations(iterations: u32) -> Self {
+        Self {
+            iterations: iterations.max(1),
+            ..Self::default()
+        }
+    }
+
+    /// Sweeps per step.
+    #[must_use]
+    pub fn iterations(&self) -> u32 {
+        self.iterations
+    }
+}
+
+fn build(_mesh: &ClothMesh, options: &Value) -> Result<Box<dyn Solver>, OptionError> {
+    let iterations = Xpbd::ENTRY.integer(options, "iterations")?;
+    // The entry's range (1 to 1000) fits a u32.
+    Ok(Box::new(Xpbd::with_iterations(iterations as u32)))
+}
+
+impl Solver for Xpbd {
+    fn name(&self) -> &'static str {
+        "xpbd"
+    }
+
+    fn step(
+        &mut self,
+        mesh: &ClothMesh,
+        colliders: &[Collider],
+        params: &StepParams,
+        state: &mut ClothState,
+    ) -> Result<StepReport, SolveError> {
+        params.validate()?;
+        let dt = params.dt();
+        let mass = mesh.point_mass(params.density);
+        let inverse_mass = 1.0 / mass;
+        let keep = 1.0 - params.damping / 100.0;
+        let pinned = mesh.pinned();
+
+        // 1. Prediction.
+        let gravity_step = params.gravity * (dt * dt);
+        self.predicted.clear();
+        self.predicted
+            .extend(state.positions.iter().zip(&state.last).zip(pinned).map(
+                |((&x, &last), &pin)| {
+                    if pin {
+                        x
+                    } else {
+                        x + (x - last) * keep + gravity_step
+                    }
+                },
+            ));
+
+        // 2. Gauss-Seidel over the distance constraints, in the course's spring order.
+        let springs = mesh.springs();
+        self.lambda.clear();
+        self.lambda.resize(springs.len(), 0.0);
+        let p = &mut self.predicted;
+        let mut residual = 0.0_f64;
+        for sweep in 0..self.iterations {
+            let last_sweep = sweep + 1 == self.iterations;
+            for (s, lambda) in springs.iter().zip(self.lambda.iter_mut()) {
+                let k = params.stiffness(s.kind);
+                if k <= 0.0 {
+                    continue;
+                }
+                let (a, b) = (s.a as usize, s.b as usize);
+                let wa = if pinned[a] { 0.0 } else { inverse_mass };
+                let wb = if pinned[b] { 0.0 } else { inverse_mass };
+                let d = p[a] - p[b];
+                let len = d.norm();
+                // NOTE: coincident ends have no direction to push along; skip the spring this
+                // sweep (self-collision keeps points apart, so this is a transient).
+                if wa + wb == 0.0 || len == 0.0 {
+                    continue;
+                }
+                let c = len - s.rest;
+                let alpha_tilde = 1.0 / (k * dt * dt);
+                let dlambda = (-c - alpha_tilde * *lambda) / (wa + wb + alpha_tilde);
+                *lambda += dlambda;
+                let n = d / len;
+                p[a] += n * (wa * dlambda);
+                p[b] -= n * (wb * dlambda);
+                if last_sweep {
+                    residual = residual.max((c + alpha_tilde * (*lambda - dlambda)).abs());
+                }
+            }
+        }
+
+        // 3. The model's other constraints, through the public API.
+        if params.self_collision {
+            self.hash.resolve(mesh, p, params.steps_per_frame);
+        }
+        apply_colliders(colliders, pinned, p, &state.positions);
+        if params.stretch_limit {
+            limit_stretch(springs, pinned, p, MAX_STRETCH);
+        }
+
+        // 4. Commit: the start-of-step positions become the last ones (a pinned point's are
+        // its position, which nothing above moved).
+        std::mem::swap(&mut state.last, &mut state.positions);
+        std::mem::swap(&mut state.positions, &mut self.predicted);
+        if let Some(i) = state.first_non_finite() {
+            return Err(SolveError::non_finite(mesh, i));
+        }
+        // The residual is the largest |C + alpha~ lambda| met by the last sweep, metres: how
+        // far the step's constraint equations were from solved before its final corrections.
+        Ok(StepReport {
+            iterations: self.iterations,
+            residual,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    #[test]
+    fn the_entry_reads_its_iteration_count_and_refuses_others() {
+        let mesh = ClothMesh::new(&cloth_mesh::GridSpec::default()).unwrap();
+        assert!(Xpbd::ENTRY.build(&mesh, &json!({"iterations": 3})).is_ok());
+        let e = Xpbd::ENTRY
+            .build(&mesh, &json!({"iterations": 0}))
+            .err()
+            .unwrap();
+        assert_eq!(
+            e.to_string(),
+            "the xpbd solver's option iterations is 0, but it must be an integer from 1 to 1000"
+        );
+        assert_eq!(Xpbd::with_iterations(0).iterations(), 1);
+    }
+}
