@@ -340,10 +340,10 @@ impl Simulation {
         let limit = p.explicit_ks_limit(self.point_mass());
         (p.ks > limit).then(|| {
             format!(
-                "ks {:.0} N/m is past the {} solver's stability limit of about {limit:.0} N/m at this \
-                 density and step: expect it to blow up; lower ks, raise steps/frame or density",
+                "ks {:.0} N/m is past {}'s stability limit of about {limit:.0} N/m at this density \
+                 and step: expect it to blow up; lower ks, raise steps/frame or density",
                 p.ks,
-                self.choice.entry.name()
+                capitalised(self.choice.entry.name())
             )
         })
     }
@@ -365,6 +365,14 @@ pub fn numeric_options(entry: &SolverEntry, options: &Value) -> Vec<f64> {
             )
         })
         .collect()
+}
+
+/// A solver's name as the start of a sentence's noun: `Verlet`.
+fn capitalised(name: &str) -> String {
+    let mut chars = name.chars();
+    chars
+        .next()
+        .map_or_else(String::new, |c| c.to_uppercase().chain(chars).collect())
 }
 
 /// A possibly huge number, readable: `123`, `4.6e12`.
