@@ -39,7 +39,9 @@ fn main() -> Result<(), String> {
         (None, None) => a.cmp(b),
     });
 
-    let mut code = String::from("/// Every bundled scene: the course's five (unchanged), then clothsim's own.\n");
+    let mut code = String::from(
+        "/// Every bundled scene: the course's five (unchanged), then clothsim's own.\n",
+    );
     code.push_str("pub const BUNDLED: &[BundledScene] = &[\n");
     for (name, path) in &scenes {
         let text = std::fs::read_to_string(path)
@@ -62,8 +64,9 @@ fn main() -> Result<(), String> {
         };
         let _ = writeln!(
             code,
-            "    BundledScene {{ name: {name:?}, description: {description:?}, json: include_str!({:?}) }},",
-            path.display().to_string()
+            "    BundledScene {{ name: {name:?}, description: {description:?}, \
+             json: include_str!({path:?}) }},",
+            path = path.display().to_string()
         );
     }
     code.push_str("];\n");
@@ -73,8 +76,8 @@ fn main() -> Result<(), String> {
 
 /// The `name: description` lines of `path` (blank lines and `#` comments skipped).
 fn read_descriptions(path: &Path) -> Result<Vec<(String, String)>, String> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();

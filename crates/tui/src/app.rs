@@ -59,7 +59,8 @@ pub struct Args {
           value_parser = crate::cli::color_parser())]
     pub color: ColorChoice,
     /// Glyph mode of the cloth panes.
-    #[arg(long, default_value = "ascii", ignore_case = true, value_parser = crate::cli::mode_parser())]
+    #[arg(long, default_value = "ascii", ignore_case = true,
+          value_parser = crate::cli::mode_parser())]
     pub mode: Mode,
 }
 

@@ -99,10 +99,8 @@ impl Cli {
             }
             Some(Command::Completions { shell }) => print(&completions(shell)),
             Some(Command::Man { dir: None }) => print(&man_page()?),
-            Some(Command::Man { dir: Some(dir) }) => {
-                clap_mangen::generate_to(Cli::command(), &dir)
-                    .with_context(|| format!("{}: cannot write the manual pages", dir.display()))
-            }
+            Some(Command::Man { dir: Some(dir) }) => clap_mangen::generate_to(Cli::command(), &dir)
+                .with_context(|| format!("{}: cannot write the manual pages", dir.display())),
             None => app::run(&self.tui),
         }
     }
@@ -189,7 +187,9 @@ fn completions(shell: Shell) -> Vec<u8> {
                 out.push('\n');
                 if i == 0 {
                     out.push_str(&format!(
-                        "\n_clothsim_scenes() {{\n    _alternative 'scenes:bundled scene:({names})' \\\n        'files:scene file:_files -g \"*.json\"'\n}}\n"
+                        "\n_clothsim_scenes() {{\n    \
+                         _alternative 'scenes:bundled scene:({names})' \\\n        \
+                         'files:scene file:_files -g \"*.json\"'\n}}\n"
                     ));
                 }
             }
@@ -197,11 +197,12 @@ fn completions(shell: Shell) -> Vec<u8> {
         }
         Shell::Fish => {
             let mut text = text;
+            let takes_scene = "__fish_seen_subcommand_from tui simulate render";
             text.push_str(&format!(
                 "\n# Bundled scenes and scene files where a scene is expected.\n\
                  complete -c clothsim -n \"__fish_use_subcommand\" -a \"{names}\"\n\
-                 complete -c clothsim -n \"__fish_seen_subcommand_from tui simulate render\" -a \"{names}\"\n\
-                 complete -c clothsim -n \"__fish_seen_subcommand_from tui simulate render\" -k -a \"(__fish_complete_suffix .json)\"\n"
+                 complete -c clothsim -n \"{takes_scene}\" -a \"{names}\"\n\
+                 complete -c clothsim -n \"{takes_scene}\" -k -a \"(__fish_complete_suffix .json)\"\n"
             ));
             text
         }
@@ -314,7 +315,10 @@ pub(crate) fn view_parser() -> impl TypedValueParser<Value = render::ViewArg> {
         View::ALL
             .map(|v| {
                 // `describe` starts with the view's name, which the list already shows.
-                let axes = v.describe().split_once(": ").map_or(v.describe(), |(_, a)| a);
+                let axes = v
+                    .describe()
+                    .split_once(": ")
+                    .map_or(v.describe(), |(_, a)| a);
                 PossibleValue::new(v.name()).help(axes)
             })
             .into_iter()
@@ -352,7 +356,9 @@ mod tests {
 
     #[test]
     fn the_tui_command_takes_the_same_flags() {
-        let cli = parse(&["tui", "sphere", "--paused", "--mode", "braille", "--fps", "5"]);
+        let cli = parse(&[
+            "tui", "sphere", "--paused", "--mode", "braille", "--fps", "5",
+        ]);
         let Some(Command::Tui(args)) = cli.command else {
             panic!("tui parsed as {:?}", cli.command);
         };
@@ -419,12 +425,20 @@ mod tests {
             assert!(top.contains(&format!("- {value}:")), "{value} in:\n{top}");
         }
         let render = long_help(Some("render"));
-        for value in ["side", "top", "bottom", "front", "orbit", "all", "plain", "ansi"] {
-            assert!(render.contains(&format!("- {value}:")), "{value} in:\n{render}");
+        for value in [
+            "side", "top", "bottom", "front", "orbit", "all", "plain", "ansi",
+        ] {
+            assert!(
+                render.contains(&format!("- {value}:")),
+                "{value} in:\n{render}"
+            );
         }
         let bench = long_help(Some("bench"));
         for value in ["faithful", "parallel", "colored", "on", "off"] {
-            assert!(bench.contains(&format!("- {value}:")), "{value} in:\n{bench}");
+            assert!(
+                bench.contains(&format!("- {value}:")),
+                "{value} in:\n{bench}"
+            );
         }
         let completions = long_help(Some("completions"));
         for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
@@ -435,11 +449,19 @@ mod tests {
     #[test]
     fn the_top_level_help_shows_the_ui_flags_the_commands_and_examples() {
         let top = long_help(None);
-        for needle in ["--paused", "--fps", "[SCENE]", "render", "completions", "Examples:"] {
+        for needle in [
+            "--paused",
+            "--fps",
+            "[SCENE]",
+            "render",
+            "completions",
+            "Examples:",
+        ] {
             assert!(top.contains(needle), "{needle} in:\n{top}");
         }
         assert!(
-            top.trim_end().ends_with(EXAMPLES.lines().last().unwrap_or_default()),
+            top.trim_end()
+                .ends_with(EXAMPLES.lines().last().unwrap_or_default()),
             "the examples close the help:\n{top}"
         );
     }
@@ -472,8 +494,12 @@ mod tests {
             Shell::PowerShell,
         ] {
             let text = String::from_utf8(completions(shell)).expect("UTF-8");
-            for needle in ["simulate", "render", "--frames", "braille"] {
+            for needle in ["simulate", "render", "frames", "mode"] {
                 assert!(text.contains(needle), "{shell}: {needle} missing");
+            }
+            // Elvish and PowerShell scripts complete names only, not option values.
+            if matches!(shell, Shell::Bash | Shell::Zsh | Shell::Fish) {
+                assert!(text.contains("braille"), "{shell}: the values of --mode");
             }
         }
     }
@@ -495,7 +521,10 @@ mod tests {
             .lines()
             .filter(|l| l.trim().starts_with("opts=") && l.contains(" pinned4 "))
             .count();
-        assert_eq!(with_scenes, 4, "top level, tui, simulate and render:\n{bash}");
+        assert_eq!(
+            with_scenes, 4,
+            "top level, tui, simulate and render:\n{bash}"
+        );
         let zsh = String::from_utf8(completions(Shell::Zsh)).expect("UTF-8");
         assert!(zsh.contains("_files -g"), "zsh offers scene files too");
         assert_eq!(
@@ -508,7 +537,10 @@ mod tests {
     #[test]
     fn the_man_page_is_roff_and_lists_the_commands() {
         let page = String::from_utf8(man_page().expect("renders")).expect("UTF-8");
-        assert!(page.starts_with(".ie") || page.contains(".TH clothsim 1"), "{page}");
+        assert!(
+            page.starts_with(".ie") || page.contains(".TH clothsim 1"),
+            "{page}"
+        );
         for needle in ["simulate", "render", "completions", "\\-\\-paused"] {
             assert!(page.contains(needle), "{needle} in:\n{page}");
         }

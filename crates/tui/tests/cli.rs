@@ -254,7 +254,10 @@ fn render_rejects_bad_sizes_and_views_with_clear_messages() {
             ["--view", "diagonal"],
             "[possible values: side, top, bottom, front, orbit, all]",
         ),
-        (["--mode", "sixel"], "[possible values: ascii, half, braille]"),
+        (
+            ["--mode", "sixel"],
+            "[possible values: ascii, half, braille]",
+        ),
         (
             ["--color", "mauve"],
             "[possible values: auto, never, 16, 256, truecolor]",
@@ -405,10 +408,18 @@ fn bench_rejects_a_bad_grid_with_a_clear_message() {
 fn the_default_command_takes_the_ui_flags_at_the_top_level() {
     // Parsed as the live UI's arguments (not a usage error, exit code 2), the UI then refuses a
     // stdout that is not a terminal: the scene and flags reached the UI.
-    for args in [&["pinned2", "--paused"][..], &["--fps", "10"], &["tui", "sphere"]] {
+    for args in [
+        &["pinned2", "--paused"][..],
+        &["--fps", "10"],
+        &["tui", "sphere"],
+    ] {
         let o = clothsim(args);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
-        assert!(stderr(&o).contains("needs a terminal"), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("needs a terminal"),
+            "{args:?}: {}",
+            stderr(&o)
+        );
     }
     // A UI flag's value is checked like any other.
     let o = clothsim(&["--fps", "0"]);
@@ -443,7 +454,10 @@ fn the_version_names_the_built_in_solvers_and_vector_paths() {
     let o = clothsim(&["--version"]);
     assert!(o.status.success());
     let v = String::from_utf8(o.stdout).unwrap();
-    assert!(v.starts_with(&format!("clothsim {}", env!("CARGO_PKG_VERSION"))), "{v}");
+    assert!(
+        v.starts_with(&format!("clothsim {}", env!("CARGO_PKG_VERSION"))),
+        "{v}"
+    );
     assert!(v.contains("solvers: verlet"), "{v}");
     assert!(v.contains("vector paths: "), "{v}");
 }
@@ -468,7 +482,11 @@ fn completions_print_a_script_for_every_shell_and_bash_parses_it() {
     assert!(syntax.status.success(), "{}", stderr(&syntax));
     let o = clothsim(&["completions", "tcsh"]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("possible values: bash"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("possible values: bash"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]
@@ -481,7 +499,12 @@ fn man_prints_the_page_and_writes_one_per_command_into_a_folder() {
     let dir = tempfile::tempdir().unwrap();
     let o = clothsim(&["man", "--dir", dir.path().to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
-    for page in ["clothsim.1", "clothsim-render.1", "clothsim-simulate.1", "clothsim-tui.1"] {
+    for page in [
+        "clothsim.1",
+        "clothsim-render.1",
+        "clothsim-simulate.1",
+        "clothsim-tui.1",
+    ] {
         let text = std::fs::read_to_string(dir.path().join(page))
             .unwrap_or_else(|e| panic!("{page}: {e}"));
         assert!(text.starts_with(".ie") && text.contains(".TH"), "{page}");

@@ -169,11 +169,22 @@ fn a_scene_and_ui_flags_at_the_top_level_open_the_ui() {
     };
     let bin = env!("CARGO_BIN_EXE_clothsim");
     let started = t.run(&[
-        "new-session", "-d", "-s", "e2e", "-x", "100", "-y", "30", "sh",
+        "new-session",
+        "-d",
+        "-s",
+        "e2e",
+        "-x",
+        "100",
+        "-y",
+        "30",
+        "sh",
     ]);
     assert!(started.status.success(), "{started:?}");
     t.keys(&["PS1='$ '; stty sane", "Enter"]);
-    t.keys(&[&format!("{bin} pinned2 --paused; echo \"exit=$?\""), "Enter"]);
+    t.keys(&[
+        &format!("{bin} pinned2 --paused; echo \"exit=$?\""),
+        "Enter",
+    ]);
     let s = t.wait_for("the UI on pinned2, paused", 30, |s| {
         s.contains("pinned2") && s.contains("PAUSED") && s.contains("parameters")
     });
