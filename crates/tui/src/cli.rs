@@ -6,6 +6,7 @@
 //! scene file called `render` is opened as `clothsim ./render`, `clothsim tui render` or
 //! `clothsim -- render`.
 
+use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -186,11 +187,12 @@ fn completions(shell: Shell) -> Vec<u8> {
                 }
                 out.push('\n');
                 if i == 0 {
-                    out.push_str(&format!(
+                    let _ = write!(
+                        out,
                         "\n_clothsim_scenes() {{\n    \
                          _alternative 'scenes:bundled scene:({names})' \\\n        \
                          'files:scene file:_files -g \"*.json\"'\n}}\n"
-                    ));
+                    );
                 }
             }
             out
@@ -198,12 +200,13 @@ fn completions(shell: Shell) -> Vec<u8> {
         Shell::Fish => {
             let mut text = text;
             let takes_scene = "__fish_seen_subcommand_from tui simulate render";
-            text.push_str(&format!(
+            let _ = write!(
+                text,
                 "\n# Bundled scenes and scene files where a scene is expected.\n\
                  complete -c clothsim -n \"__fish_use_subcommand\" -a \"{names}\"\n\
                  complete -c clothsim -n \"{takes_scene}\" -a \"{names}\"\n\
                  complete -c clothsim -n \"{takes_scene}\" -k -a \"(__fish_complete_suffix .json)\"\n"
-            ));
+            );
             text
         }
         _ => text,
@@ -259,11 +262,12 @@ fn vector_paths() -> String {
         let avx2 = std::arch::is_x86_feature_detected!("avx2");
         let avx512 = std::arch::is_x86_feature_detected!("avx512f")
             && std::arch::is_x86_feature_detected!("avx512vl");
-        text.push_str(&format!(
+        let _ = write!(
+            text,
             "; chosen at run time: avx2 ({} on this CPU), avx512vl ({} on this CPU)",
             yes_no(avx2),
             yes_no(avx512)
-        ));
+        );
     }
     text
 }
