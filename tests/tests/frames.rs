@@ -1,7 +1,8 @@
 //! Snapshot frames of every bundled scene, as `clothsim render` prints them.
 //!
-//! Found by globbing `scenes/`, so a new scene is covered with no new code: side and top views
-//! at 80 x 40 after a fixed number of frames, plus the other views and modes on `pinned4`.
+//! Found by globbing `crates/scene/scenes/`, so a new scene is covered with no new code: side
+//! and top views at 80 x 40 after a fixed number of frames, plus the other views and modes on
+//! `pinned4`.
 //! Deterministic: fixed sizes, frame counts and seeds, no clock, ordered dithering.
 //! Review a changed snapshot by eye (`cargo insta review`): it must look like a cloth.
 
@@ -65,7 +66,7 @@ fn frame(scene: &Scene, state: &ClothState, view: View, mode: Mode, size: &str) 
 
 #[test]
 fn every_scene_side_and_top_after_150_frames() {
-    insta::glob!("../../scenes", "*.json", |path| {
+    insta::glob!("../../crates/scene/scenes", "*.json", |path| {
         let scene = cloth_scene::load(path.to_str().unwrap(), &[]).unwrap();
         let state = simulate(&scene, FRAMES);
         let side = frame(&scene, &state, View::Side, Mode::Ascii, "80x40");

@@ -1,4 +1,4 @@
-//! Every scene file in `scenes/`: bundled, loadable by path and by name, and runs sanely.
+//! Every scene file in `crates/scene/scenes/`: bundled, loadable by path and by name, and runs sanely.
 //! Found by listing the folder, so a new scene file is covered with no new code.
 
 use std::path::PathBuf;
@@ -7,7 +7,7 @@ use cloth_mesh::ClothState;
 use cloth_solver::{Solver, Verlet, advance_frame, max_stretch_ratio};
 
 fn scene_files() -> Vec<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../crates/scene/scenes");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())

@@ -1,4 +1,5 @@
-//! The implicit solvers checked against the course's Verlet (issue 5, checks 1, 2, 3 and 6).
+//! The implicit solvers checked against the course's Verlet: equilibria, convergence as the
+//! step shrinks, settling where Verlet diverges, and stability on a large stiff cloth.
 
 mod common;
 
@@ -51,7 +52,7 @@ fn verlet_rest(mesh: &ClothMesh, params: &StepParams) -> (ClothState, ClothState
 /// curtain has several rest states (the slack top edge between the pins folds one way or the
 /// other) and which one a run reaches depends on its path; backward Euler at 0.25 s steps takes
 /// another path than Verlet at 1/2700 s. After 1 s both are in the same basin, so the comparison
-/// is between fixed points, which is what the issue asks.
+/// is between fixed points, which is what this check is about.
 fn implicit_rest(mesh: &ClothMesh, params: &StepParams, start: &ClothState) -> ClothState {
     let big = StepParams {
         steps_per_frame: 1,
@@ -96,7 +97,7 @@ fn without_the_limit_implicit_and_verlet_rest_at_the_same_equilibrium() {
     // Both rest states solve grad E = 0 (Verlet's fixed point has zero net force; backward
     // Euler's has x = y, hence grad E = 0), so they may differ only by how far each run is
     // from that point: ~3e-9 m for Verlet (see verlet_rest) and ~1e-11 m for the implicit run.
-    // The issue's 1e-6 m leaves room for nothing else.
+    // A bound of 1e-6 m leaves room for nothing else.
     //
     // NOTE: pinned2 has a very soft mode (the slack top edge between the pins, w ~ 0.03 rad/s
     // at ks = 1e5): overdamped, it decays at w^2 / c ~ 1e-4 1/s, so Verlet's "settled" state

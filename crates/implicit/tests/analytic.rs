@@ -1,4 +1,4 @@
-//! Analytic equilibria (issue 5, check 4): a hanging spring and a hanging chain.
+//! Analytic equilibria: a hanging spring and a hanging chain.
 
 mod common;
 

@@ -7,55 +7,12 @@ pub struct BundledScene {
     pub name: &'static str,
     /// One line saying what the scene shows.
     pub description: &'static str,
-    /// The file's JSON text, byte for byte as in `scenes/`.
+    /// The file's JSON text, byte for byte as in this crate's `scenes/` folder.
     pub json: &'static str,
 }
 
-macro_rules! scene {
-    ($name:literal, $description:literal) => {
-        BundledScene {
-            name: $name,
-            description: $description,
-            json: include_str!(concat!("../../../scenes/", $name, ".json")),
-        }
-    };
-}
-
-/// Every bundled scene: the course's five (unchanged), then clothsim's own.
-pub const BUNDLED: &[BundledScene] = &[
-    scene!(
-        "pinned2",
-        "CS184: horizontal cloth pinned at two corners of one edge, swings down and hangs"
-    ),
-    scene!(
-        "pinned4",
-        "CS184: horizontal cloth pinned at its four corners, sags into a hammock (the default)"
-    ),
-    scene!(
-        "sphere",
-        "CS184: unpinned cloth falls onto a sphere and drapes over it (no floor)"
-    ),
-    scene!(
-        "plane",
-        "CS184: unpinned cloth falls flat onto a floor with friction"
-    ),
-    scene!(
-        "selfCollision",
-        "CS184: vertical cloth standing on the floor collapses onto itself"
-    ),
-    scene!(
-        "curtain",
-        "clothsim: a curtain hung from every third point of its top edge, billowing in a breeze"
-    ),
-    scene!(
-        "drape",
-        "clothsim: a tablecloth falls over a sphere and spreads onto the floor beneath"
-    ),
-    scene!(
-        "hammock",
-        "clothsim: a long cloth slung between two pinned edges, sagging under gravity"
-    ),
-];
+// `BUNDLED`: every `scenes/*.json` file of this crate, written by the build script.
+include!(concat!(env!("OUT_DIR"), "/bundled.rs"));
 
 /// The bundled scene called `name` (case-sensitive, as listed by `clothsim scenes`).
 #[must_use]

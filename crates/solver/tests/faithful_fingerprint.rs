@@ -15,7 +15,7 @@ use std::path::PathBuf;
 use cloth_mesh::{ClothMesh, ClothState, GridSpec, Orientation};
 use cloth_solver::{StepParams, Verlet, advance_frame};
 
-/// Metres. The bar: the optimised solver must stay within 1e-9 m of the original after
+/// Metres. The bar for the fast paths: the optimised solver must stay within 1e-9 m of the original after
 /// 90 frames (2,700 steps). Rounding differences of a reordered sum are ~1e-17 m per step; even
 /// amplified by the cloth's wrinkling over 2,700 steps they stay far below 1e-9 m unless the
 /// *model* changed (a different sweep order, a missed pair in self-collision, a different

@@ -39,7 +39,7 @@ use sim::Simulation;
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     /// A bundled scene name (see `clothsim scenes`) or a path to a scene JSON file.
-    #[arg(default_value = "pinned4")]
+    #[arg(default_value = "pinned4", value_hint = clap::ValueHint::FilePath)]
     pub scene: String,
     /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).
     #[arg(long)]
@@ -53,12 +53,14 @@ pub struct Args {
     /// Most frames drawn per second (1 to 240).
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=240))]
     pub fps: u32,
-    /// Colour: auto (interface colours on a terminal without NO_COLOR, glyph-only cloth),
-    /// never, or 16 / 256 / truecolor (coloured cloth too).
-    #[arg(long, value_name = "WHEN", default_value = "auto")]
+    /// Colour: under auto the interface is coloured and the cloth stays in glyphs; a depth
+    /// (16, 256, truecolor) colours the cloth too.
+    #[arg(long, value_name = "WHEN", default_value = "auto", ignore_case = true,
+          value_parser = crate::cli::color_parser())]
     pub color: ColorChoice,
-    /// Glyph mode of the cloth panes: ascii, half or braille.
-    #[arg(long, default_value = "ascii")]
+    /// Glyph mode of the cloth panes.
+    #[arg(long, default_value = "ascii", ignore_case = true,
+          value_parser = crate::cli::mode_parser())]
     pub mode: Mode,
 }
 

@@ -60,9 +60,12 @@ pub struct Args {
     json: bool,
 }
 
+/// On or off.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Switch {
+    /// Enabled.
     On,
+    /// Disabled.
     Off,
 }
 

@@ -69,6 +69,7 @@ pub enum Format {
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// A bundled scene name (see `clothsim scenes`) or a path to a scene JSON file.
+    #[arg(value_hint = clap::ValueHint::FilePath)]
     scene: String,
     /// Frames to simulate (each 1/frames_per_sec seconds of simulated time); 0 shows the start.
     #[arg(long, default_value_t = 90, value_parser = clap::value_parser!(u64).range(0..=10_000_000))]
@@ -76,22 +77,22 @@ pub struct Args {
     /// Print every K-th frame (frames K, 2K, ... and always the last); default: only the last.
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..))]
     every: Option<u64>,
-    /// side (looking -z, +x right, +y up), top (looking down, +x right, +z down), bottom,
-    /// front (looking +x, +z right, +y up), orbit (the course's perspective camera), or all
-    /// (side, top and front next to each other, labelled).
-    #[arg(long, default_value = "side", value_name = "VIEW")]
+    /// Which way the scene is looked at (orbit is the course's perspective camera).
+    #[arg(long, default_value = "side", value_name = "VIEW", ignore_case = true,
+          value_parser = crate::cli::view_parser())]
     view: ViewArg,
     /// Size of each frame (each panel with `--view all`) in character cells.
     #[arg(long, default_value = "80x40", value_name = "WxH")]
     size: FrameSize,
-    /// ascii (glyph ramp), half (half blocks, two pixels per cell) or braille (2 x 4 dots).
-    #[arg(long, default_value = "ascii", value_name = "MODE")]
+    /// How pixels become characters.
+    #[arg(long, default_value = "ascii", value_name = "MODE", ignore_case = true,
+          value_parser = crate::cli::mode_parser())]
     mode: Mode,
-    /// Colour with `--format ansi`: auto (COLORTERM's depth unless NO_COLOR is set), never,
-    /// 16, 256 or truecolor. Plain format never writes colour.
-    #[arg(long, default_value = "auto", value_name = "WHEN")]
+    /// Colour with `--format ansi` (plain format never writes colour).
+    #[arg(long, default_value = "auto", value_name = "WHEN", ignore_case = true,
+          value_parser = crate::cli::color_parser())]
     color: ColorChoice,
-    /// plain (glyphs only) or ansi (with colour escapes).
+    /// How frames are written.
     #[arg(long, value_enum, default_value_t = Format::Plain)]
     format: Format,
     /// Override a scene value: a dotted key and a JSON value, e.g. `cloth.ks=100000`.

@@ -15,6 +15,7 @@ use crate::{output, solvers};
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// A bundled scene name (see `clothsim scenes`) or a path to a scene JSON file.
+    #[arg(value_hint = clap::ValueHint::FilePath)]
     scene: String,
     /// Frames to simulate (each 1/frames_per_sec seconds of simulated time).
     #[arg(long, default_value_t = 90, value_parser = clap::value_parser!(u64).range(0..=10_000_000))]
@@ -27,7 +28,7 @@ pub struct Args {
     solver: Option<String>,
     /// Where to write the final state: a `.json` file (positions) or a `.obj` file (mesh).
     /// Without it, JSON goes to stdout.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_hint = clap::ValueHint::FilePath)]
     out: Option<PathBuf>,
 }
 

@@ -2,10 +2,9 @@
 //!
 //! On a virtual machine whose host is shared, the hypervisor runs other guests on the cores
 //! this one was given ("steal" time). A benchmark then slows down for reasons that are not in
-//! the code: on the machine of the tenth and eleventh sessions the same binary took a `pinned4`
-//! frame in 2 to 3.5 ms, and two threads on the 256 x 256 cloth ran at 0.4 to 1.8 x the speed
-//! of one, from one run to the next. `clothsim bench` prints the share next to each timing, so
-//! a reader knows which figures to trust.
+//! the code, by tens of percent from one run to the next, and threads that wait for each other
+//! suffer most. `clothsim bench` prints the share next to each timing, so a reader knows which
+//! figures to trust.
 
 use std::path::Path;
 

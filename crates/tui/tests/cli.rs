@@ -326,9 +326,16 @@ fn render_rejects_bad_sizes_and_views_with_clear_messages() {
         (["--size", "big"], "WIDTHxHEIGHT"),
         (
             ["--view", "diagonal"],
-            "expected side, top, bottom, front, orbit or all",
+            "[possible values: side, top, bottom, front, orbit, all]",
         ),
-        (["--mode", "sixel"], "expected ascii, half or braille"),
+        (
+            ["--mode", "sixel"],
+            "[possible values: ascii, half, braille]",
+        ),
+        (
+            ["--color", "mauve"],
+            "[possible values: auto, never, 16, 256, truecolor]",
+        ),
     ] {
         let mut all = vec!["render", "pinned4", "--frames", "0"];
         all.extend(args);
@@ -469,4 +476,111 @@ fn bench_rejects_a_bad_grid_with_a_clear_message() {
     assert!(!o.status.success());
     let err = stderr(&o);
     assert!(err.contains("--grid 1"), "{err}");
+}
+
+#[test]
+fn the_default_command_takes_the_ui_flags_at_the_top_level() {
+    // Parsed as the live UI's arguments (not a usage error, exit code 2), the UI then refuses a
+    // stdout that is not a terminal: the scene and flags reached the UI.
+    for args in [
+        &["pinned2", "--paused"][..],
+        &["--fps", "10"],
+        &["tui", "sphere"],
+    ] {
+        let o = clothsim(args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("needs a terminal"),
+            "{args:?}: {}",
+            stderr(&o)
+        );
+    }
+    // A UI flag's value is checked like any other.
+    let o = clothsim(&["--fps", "0"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("1..=240"), "{}", stderr(&o));
+}
+
+#[test]
+fn help_lists_the_values_of_enumerated_options_and_ends_with_examples() {
+    let o = clothsim(&["--help"]);
+    assert!(o.status.success());
+    let help = String::from_utf8(o.stdout).unwrap();
+    for needle in [
+        "--paused",
+        "- braille:",
+        "- truecolor:",
+        "completions",
+        "Examples:",
+        "clothsim sphere --paused",
+    ] {
+        assert!(help.contains(needle), "{needle} in:\n{help}");
+    }
+    let short = String::from_utf8(clothsim(&["render", "-h"]).stdout).unwrap();
+    assert!(
+        short.contains("[possible values: side, top, bottom, front, orbit, all]"),
+        "{short}"
+    );
+}
+
+#[test]
+fn the_version_names_the_built_in_solvers_and_vector_paths() {
+    let o = clothsim(&["--version"]);
+    assert!(o.status.success());
+    let v = String::from_utf8(o.stdout).unwrap();
+    assert!(
+        v.starts_with(&format!("clothsim {}", env!("CARGO_PKG_VERSION"))),
+        "{v}"
+    );
+    assert!(v.contains("solvers: verlet"), "{v}");
+    assert!(v.contains("vector paths: "), "{v}");
+}
+
+#[test]
+fn completions_print_a_script_for_every_shell_and_bash_parses_it() {
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        let o = clothsim(&["completions", shell]);
+        assert!(o.status.success(), "{shell}: {}", stderr(&o));
+        let script = String::from_utf8(o.stdout).unwrap();
+        assert!(script.contains("simulate"), "{shell}");
+    }
+    let script = clothsim(&["completions", "bash"]).stdout;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("clothsim.bash");
+    std::fs::write(&path, script).unwrap();
+    let syntax = std::process::Command::new("bash")
+        .arg("-n")
+        .arg(&path)
+        .output()
+        .expect("bash runs");
+    assert!(syntax.status.success(), "{}", stderr(&syntax));
+    let o = clothsim(&["completions", "tcsh"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("possible values: bash"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn man_prints_the_page_and_writes_one_per_command_into_a_folder() {
+    let o = clothsim(&["man"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let page = String::from_utf8(o.stdout).unwrap();
+    assert!(page.contains(".TH clothsim 1"), "{page}");
+    assert!(page.contains("completions"), "{page}");
+    let dir = tempfile::tempdir().unwrap();
+    let o = clothsim(&["man", "--dir", dir.path().to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for page in [
+        "clothsim.1",
+        "clothsim-render.1",
+        "clothsim-simulate.1",
+        "clothsim-tui.1",
+    ] {
+        let text = std::fs::read_to_string(dir.path().join(page))
+            .unwrap_or_else(|e| panic!("{page}: {e}"));
+        assert!(text.starts_with(".ie") && text.contains(".TH"), "{page}");
+    }
 }

@@ -157,6 +157,43 @@ fn the_live_ui_draws_the_cloth_edits_a_parameter_and_restores_the_shell() {
 }
 
 #[test]
+fn a_scene_and_ui_flags_at_the_top_level_open_the_ui() {
+    if !tmux_available() {
+        let ci = std::env::var("CI").is_ok_and(|v| v == "true");
+        assert!(!ci, "tmux is required under CI (.ci/run installs it)");
+        eprintln!("NOTICE: tmux is not installed; skipping the end-to-end TUI test");
+        return;
+    }
+    let t = Tmux {
+        socket: format!("clothsim-e2e-top-{}", std::process::id()),
+    };
+    let bin = env!("CARGO_BIN_EXE_clothsim");
+    let started = t.run(&[
+        "new-session",
+        "-d",
+        "-s",
+        "e2e",
+        "-x",
+        "100",
+        "-y",
+        "30",
+        "sh",
+    ]);
+    assert!(started.status.success(), "{started:?}");
+    t.keys(&["PS1='$ '; stty sane", "Enter"]);
+    t.keys(&[
+        &format!("{bin} pinned2 --paused; echo \"exit=$?\""),
+        "Enter",
+    ]);
+    let s = t.wait_for("the UI on pinned2, paused", 30, |s| {
+        s.contains("pinned2") && s.contains("PAUSED") && s.contains("parameters")
+    });
+    assert!(s.contains("t 0.000 s"), "paused from the start:\n{s}");
+    t.keys(&["q"]);
+    t.wait_for("the shell", 10, |s| s.contains("exit=0"));
+}
+
+#[test]
 fn without_a_terminal_it_points_to_render() {
     let o = Command::new(env!("CARGO_BIN_EXE_clothsim"))
         .arg("tui")
