@@ -42,13 +42,11 @@ impl Cli {
             Some(Command::Simulate(args)) => simulate::run(&args, registry),
             Some(Command::Render(args)) => render::run(&args, registry),
             Some(Command::Bench(args)) => bench::run(&args, registry),
-            Some(Command::Scenes) => {
-                scenes::run();
-                Ok(())
-            }
+            Some(Command::Scenes) => scenes::run(),
             Some(Command::Solvers) => {
-                print!("{}", solvers::listing(registry));
-                Ok(())
+                let mut out = crate::output::Stdout::new();
+                out.write_all_or_fail(solvers::listing(registry).as_bytes())?;
+                out.finish()
             }
             None => app::run(&app::Args::default(), registry),
         }
