@@ -35,6 +35,12 @@ pub enum RenderError {
         /// Rows asked for.
         height: usize,
     },
+    /// A frame size with a number too large to hold, as typed.
+    #[error("frame size {value} is too large; it must be at most {MAX_WIDTH}x{MAX_HEIGHT}")]
+    TooLargeAsTyped {
+        /// The size as typed.
+        value: String,
+    },
     /// The state does not belong to the mesh.
     #[error("the cloth state has {positions} positions but the mesh has {points} points")]
     StateMismatch {

@@ -83,13 +83,16 @@ impl FromStr for FrameSize {
             allowed: "WIDTHxHEIGHT in character cells, e.g. 80x40",
         };
         let (w, h) = s.trim().split_once(['x', 'X']).ok_or_else(unknown)?;
-        // Huge digit strings overflow usize; they are "too large", not "unknown".
+        // Huge digit strings overflow usize; they are "too large" (as typed), not "unknown".
         let parse = |t: &str| -> Result<usize, RenderError> {
             let t = t.trim();
             if t.is_empty() || !t.bytes().all(|b| b.is_ascii_digit()) {
                 return Err(unknown());
             }
-            Ok(t.parse::<usize>().unwrap_or(usize::MAX))
+            t.parse::<usize>()
+                .map_err(|_| RenderError::TooLargeAsTyped {
+                    value: s.trim().to_owned(),
+                })
         };
         Self::new(parse(w)?, parse(h)?)
     }
@@ -299,10 +302,17 @@ mod tests {
                 height: 40
             })
         );
-        assert!(matches!(
-            "99999999999999999999999x4".parse::<FrameSize>(),
-            Err(RenderError::TooLarge { .. })
-        ));
+        // A number too large to hold is reported as typed, not as the largest integer.
+        assert_eq!(
+            "99999999999999999999999x4"
+                .parse::<FrameSize>()
+                .unwrap_err()
+                .to_string(),
+            format!(
+                "frame size 99999999999999999999999x4 is too large; it must be at most \
+                 {MAX_WIDTH}x{MAX_HEIGHT}"
+            )
+        );
         let e = "80by40".parse::<FrameSize>().unwrap_err();
         assert_eq!(
             e.to_string(),

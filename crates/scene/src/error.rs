@@ -13,8 +13,37 @@ pub enum SceneError {
         /// The I/O error.
         source: std::io::Error,
     },
+    /// The path is not a regular file (a folder, a FIFO, a device...), so it is not read.
+    #[error("{} is {kind}, not a scene file", path.display())]
+    NotRegular {
+        /// The path.
+        path: PathBuf,
+        /// What it is, in words (`a FIFO (named pipe)`).
+        kind: &'static str,
+    },
+    /// The file is larger than any scene file needs to be.
+    #[error("{} is {size} bytes; scene files are read up to 64 MiB ({limit} bytes)", path.display())]
+    TooLarge {
+        /// The path.
+        path: PathBuf,
+        /// Its size in bytes.
+        size: u64,
+        /// The cap, [`crate::MAX_SCENE_BYTES`].
+        limit: u64,
+    },
+    /// The file is not UTF-8 text.
+    #[error("{}: {reason}", path.display())]
+    NotText {
+        /// The path.
+        path: PathBuf,
+        /// What the bytes are instead.
+        reason: String,
+    },
     /// Neither a file nor a bundled scene has this name.
-    #[error("no scene file or bundled scene named {name:?}; bundled scenes: {available}")]
+    #[error(
+        "no bundled scene named {name:?} and no file {name}; bundled scenes: {available} \
+         (a path with a folder, such as ./{name}, or ending in .json is always read as a file)"
+    )]
     UnknownScene {
         /// What was asked for.
         name: String,

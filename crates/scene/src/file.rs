@@ -3,7 +3,13 @@
 //! These mirror the file one to one (so a loaded scene saves back in the same shape); range
 //! checks happen afterwards in [`crate::parse`], where the error can name the value and the rule.
 
+use std::fmt;
+use std::marker::PhantomData;
+
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::{Deserialize, Serialize};
+
+use crate::number::show;
 
 /// A whole scene file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -42,7 +48,11 @@ pub struct ClothBlock {
     /// 0 = horizontal (xz-plane at y = 1), 1 = vertical (xy-plane).
     pub orientation: i64,
     /// Pinned points as `[column, row]`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "pins"
+    )]
     pub pinned: Option<Vec<[i64; 2]>>,
     /// Whether structural springs act.
     pub enable_structural: bool,
@@ -63,6 +73,7 @@ pub struct ClothBlock {
 #[serde(deny_unknown_fields)]
 pub struct SphereBlock {
     /// Centre, metres.
+    #[serde(deserialize_with = "xyz")]
     pub origin: [f64; 3],
     /// Radius, metres (> 0).
     pub radius: f64,
@@ -75,8 +86,10 @@ pub struct SphereBlock {
 #[serde(deny_unknown_fields)]
 pub struct PlaneBlock {
     /// A point on the plane, metres.
+    #[serde(deserialize_with = "xyz")]
     pub point: [f64; 3],
     /// Normal (any non-zero length; normalised on load).
+    #[serde(deserialize_with = "xyz")]
     pub normal: [f64; 3],
     /// Friction in [0, 1].
     pub friction: f64,
@@ -93,7 +106,11 @@ pub struct SimulationBlock {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub simulation_steps: Option<u64>,
     /// Gravity, m/s^2 (default [0, -9.8, 0]).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "optional_xyz"
+    )]
     pub gravity: Option<[f64; 3]>,
     /// Whether self-collision is on (default true).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -120,4 +137,95 @@ pub struct SimulationBlock {
     /// Seed of the vertical cloth's z-jitter (default 184).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
+}
+
+// NOTE: serde reads `[T; N]` by taking N elements and then finding the array's end, so an array
+// of the wrong length fails as a syntax error ("trailing characters") with no key. These read
+// the whole array and, when its length is wrong, say so as a value error: the error then names
+// the key (`sphere.origin`, `cloth.pinned[3]`), shows the array and says what is allowed.
+
+/// A JSON array of exactly `N` elements, described as `shape` (`[x, y, z]`) in errors.
+struct Exact<T, const N: usize> {
+    shape: &'static str,
+    what: &'static str,
+    marker: PhantomData<T>,
+}
+
+/// An element that can be shown as written in an error.
+trait Element: Copy + Default {
+    fn show(&self) -> String;
+}
+
+impl Element for f64 {
+    fn show(&self) -> String {
+        show(*self)
+    }
+}
+
+impl Element for i64 {
+    fn show(&self) -> String {
+        self.to_string()
+    }
+}
+
+impl<'de, T: Deserialize<'de> + Element, const N: usize> Visitor<'de> for Exact<T, N> {
+    type Value = [T; N];
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} ({N} {})", self.shape, self.what)
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<[T; N], A::Error> {
+        let mut items = Vec::with_capacity(N);
+        while let Some(x) = seq.next_element::<T>()? {
+            items.push(x);
+        }
+        if items.len() != N {
+            let shown: Vec<String> = items.iter().map(Element::show).collect();
+            return Err(de::Error::custom(format!(
+                "[{}] has {} {}, but it must be {} ({N} {})",
+                shown.join(", "),
+                items.len(),
+                self.what,
+                self.shape,
+                self.what
+            )));
+        }
+        let mut out = [T::default(); N];
+        out.copy_from_slice(&items);
+        Ok(out)
+    }
+}
+
+fn xyz<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+    d.deserialize_seq(Exact::<f64, 3> {
+        shape: "[x, y, z]",
+        what: "numbers",
+        marker: PhantomData,
+    })
+}
+
+fn optional_xyz<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 3]>, D::Error> {
+    struct Xyz([f64; 3]);
+    impl<'de> Deserialize<'de> for Xyz {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            xyz(d).map(Xyz)
+        }
+    }
+    Ok(Option::<Xyz>::deserialize(d)?.map(|v| v.0))
+}
+
+fn pins<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec<[i64; 2]>>, D::Error> {
+    struct Pin([i64; 2]);
+    impl<'de> Deserialize<'de> for Pin {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            d.deserialize_seq(Exact::<i64, 2> {
+                shape: "[column, row]",
+                what: "integers",
+                marker: PhantomData,
+            })
+            .map(Pin)
+        }
+    }
+    Ok(Option::<Vec<Pin>>::deserialize(d)?.map(|v| v.into_iter().map(|p| p.0).collect()))
 }

@@ -12,14 +12,19 @@
 //!
 //! Every error names the file, the key, the bad value and what is allowed.
 
+mod advice;
 mod bundled;
 mod error;
 mod file;
+mod number;
 mod overrides;
+mod read;
 mod scene;
 
+pub use advice::divergence_advice;
 pub use bundled::{BUNDLED, BundledScene, bundled};
 pub use error::SceneError;
 pub use file::{ClothBlock, PlaneBlock, SceneFile, SimulationBlock, SphereBlock};
 pub use overrides::apply_set;
-pub use scene::{Scene, load, parse};
+pub use read::{MAX_SCENE_BYTES, check_scene_path, read_scene_file};
+pub use scene::{Scene, load, parse, shadowing_file};

@@ -29,8 +29,18 @@ pub fn apply_set(root: &mut Value, arg: &str) -> Result<(), SceneError> {
             "the key must be a dotted path such as cloth.ks or simulation.gravity",
         ));
     }
-    let value =
-        serde_json::from_str(raw.trim()).unwrap_or_else(|_| Value::String(raw.trim().to_owned()));
+    let raw = raw.trim();
+    let value = match serde_json::from_str(raw) {
+        Ok(v) => v,
+        // A number JSON cannot hold (1e309) is not a string the user meant: say so.
+        Err(_) if looks_like_number(raw) => {
+            return Err(bad(&format!(
+                "{raw} is out of range: a value's magnitude must be below about 1.8e308 \
+                 (the largest 64-bit float)"
+            )));
+        }
+        Err(_) => Value::String(raw.to_owned()),
+    };
     let mut node = root;
     let parts: Vec<&str> = key.split('.').collect();
     for (i, part) in parts.iter().enumerate() {
@@ -49,6 +59,23 @@ pub fn apply_set(root: &mut Value, arg: &str) -> Result<(), SceneError> {
             .or_insert_with(|| Value::Object(serde_json::Map::new()));
     }
     Ok(())
+}
+
+/// Whether `s` is written as a JSON number (`-12.5e3`), whatever its magnitude.
+fn looks_like_number(s: &str) -> bool {
+    let s = s.strip_prefix('-').unwrap_or(s);
+    let (mantissa, exponent) = match s.find(['e', 'E']) {
+        Some(i) => (&s[..i], Some(&s[i + 1..])),
+        None => (s, None),
+    };
+    let (int, frac) = match mantissa.split_once('.') {
+        Some((i, f)) => (i, Some(f)),
+        None => (mantissa, None),
+    };
+    let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
+    digits(int)
+        && frac.is_none_or(digits)
+        && exponent.is_none_or(|e| digits(e.strip_prefix(['+', '-']).unwrap_or(e)))
 }
 
 #[cfg(test)]
@@ -83,5 +110,25 @@ mod tests {
             e,
             "--set cloth.ks.x=1: cloth.ks is not an object, so it has no key \"x\""
         );
+    }
+
+    #[test]
+    fn a_number_too_large_for_a_float_is_named_as_typed_not_taken_as_a_string() {
+        let mut v: Value = serde_json::json!({"cloth": {"ks": 5000.0}});
+        let e = apply_set(&mut v, "cloth.ks=1e309").unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "--set cloth.ks=1e309: 1e309 is out of range: a value's magnitude must be below \
+             about 1.8e308 (the largest 64-bit float)"
+        );
+        assert!(apply_set(&mut v, "cloth.ks=-2.5E+400").is_err());
+        // Words stay strings, for the checks downstream to name.
+        apply_set(&mut v, "simulation.solver=e309").unwrap();
+        assert!(looks_like_number("-12.5e-3") && looks_like_number("7"));
+        for s in [
+            "", "-", "1.", ".5", "1e", "e5", "0x10", "inf", "NaN", "1.2.3",
+        ] {
+            assert!(!looks_like_number(s), "{s}");
+        }
     }
 }

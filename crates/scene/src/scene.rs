@@ -7,7 +7,8 @@ use cloth_mesh::{
 };
 use serde_json::{Map, Value};
 
-use crate::{SceneError, SceneFile, SimulationBlock, apply_set, bundled};
+use crate::number::show;
+use crate::{SceneError, SceneFile, SimulationBlock, apply_set, bundled, read_scene_file};
 
 /// A loaded scene: everything a run needs.
 #[derive(Debug, Clone)]
@@ -117,38 +118,53 @@ impl Scene {
     }
 }
 
+/// Whether `name_or_path` is written as a path: it names a folder (`./plane`) or ends in
+/// `.json`. Anything else is a bare name.
+fn is_explicit_path(name_or_path: &str) -> bool {
+    Path::new(name_or_path)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+        || name_or_path.contains(std::path::MAIN_SEPARATOR)
+        || name_or_path.contains('/')
+}
+
 /// Loads a scene by bundled name (`pinned4`) or file path, then applies `sets` overrides.
 ///
-/// A path that exists wins over a bundled name; anything ending in `.json` or containing a path
-/// separator is treated as a path.
+/// A path with a folder in it (`./plane`, `scenes/plane.json`) or ending in `.json` is always
+/// a file. A bare name is the bundled scene of that name when there is one, even if a file of
+/// that name is in the current folder (write `./plane` for the file; [`shadowing_file`] tells
+/// when that happened); a bare name that is not bundled is read as a file. Files are read with
+/// the checks of [`read_scene_file`]: regular files only, at most [`crate::MAX_SCENE_BYTES`].
 ///
 /// # Errors
 /// [`SceneError`] naming the file, key, value and what is allowed.
 pub fn load(name_or_path: &str, sets: &[String]) -> Result<Scene, SceneError> {
     let path = Path::new(name_or_path);
-    let looks_like_path = Path::new(name_or_path)
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
-        || name_or_path.contains(std::path::MAIN_SEPARATOR)
-        || name_or_path.contains('/');
-    if path.is_file() || (looks_like_path && bundled(name_or_path).is_none()) {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        return parse(&text, name_or_path, sets);
+    if !is_explicit_path(name_or_path) {
+        if let Some(b) = bundled(name_or_path) {
+            return parse(b.json, b.name, sets);
+        }
+        if std::fs::symlink_metadata(path).is_err() {
+            return Err(SceneError::UnknownScene {
+                name: name_or_path.to_owned(),
+                available: crate::BUNDLED
+                    .iter()
+                    .map(|b| b.name)
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            });
+        }
     }
-    match bundled(name_or_path) {
-        Some(b) => parse(b.json, b.name, sets),
-        None => Err(SceneError::UnknownScene {
-            name: name_or_path.to_owned(),
-            available: crate::BUNDLED
-                .iter()
-                .map(|b| b.name)
-                .collect::<Vec<_>>()
-                .join(", "),
-        }),
-    }
+    let text = read_scene_file(path)?;
+    parse(&text, name_or_path, sets)
+}
+
+/// The file that `name` would have named, when [`load`] reads the bundled scene `name` while a
+/// file of that name is in the current folder: the path to type for the file (`./plane`).
+#[must_use]
+pub fn shadowing_file(name: &str) -> Option<String> {
+    (!is_explicit_path(name) && bundled(name).is_some() && Path::new(name).exists())
+        .then(|| format!("./{name}"))
 }
 
 /// Parses scene JSON `text`; `origin` names it in messages.
@@ -156,12 +172,20 @@ pub fn load(name_or_path: &str, sets: &[String]) -> Result<Scene, SceneError> {
 /// # Errors
 /// [`SceneError`] naming the origin, key, value and what is allowed.
 pub fn parse(text: &str, origin: &str, sets: &[String]) -> Result<Scene, SceneError> {
+    // Some editors start UTF-8 files with a byte-order mark; it is not part of the JSON.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let file: SceneFile = if sets.is_empty() {
         // Straight from the text, so type errors keep their line and column.
         let de = &mut serde_json::Deserializer::from_str(text);
-        serde_path_to_error::deserialize(de).map_err(|e| field_error(origin, e, true))?
+        let file =
+            serde_path_to_error::deserialize(&mut *de).map_err(|e| field_error(origin, e, true))?;
+        de.end().map_err(|e| syntax_error(origin, &e))?;
+        file
     } else {
-        let mut value: Value = serde_json::from_str(text).map_err(|e| syntax_error(origin, &e))?;
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let mut value: Value =
+            serde_path_to_error::deserialize(&mut *de).map_err(|e| field_error(origin, e, true))?;
+        de.end().map_err(|e| syntax_error(origin, &e))?;
         for s in sets {
             apply_set(&mut value, s)?;
         }
@@ -193,17 +217,43 @@ fn field_error(
 ) -> SceneError {
     let path = e.path().to_string();
     let inner = e.into_inner();
+    let full = inner.to_string();
+    let message = full.split(" at line ").next().unwrap_or(&full).to_owned();
+    let location = (located && inner.line() > 0).then(|| (inner.line(), inner.column()));
+    // A number too large for an f64 is found while its key is being read: name the key.
+    if message == "number out of range" && path != "." {
+        return SceneError::Field {
+            origin: origin.to_owned(),
+            key: path,
+            message: "the number is out of range: a value's magnitude must be below about \
+                      1.8e308 (the largest 64-bit float)"
+                .to_owned(),
+            location,
+        };
+    }
     if inner.is_syntax() || inner.is_eof() {
         return syntax_error(origin, &inner);
     }
-    let full = inner.to_string();
-    let message = full.split(" at line ").next().unwrap_or(&full).to_owned();
     SceneError::Field {
         origin: origin.to_owned(),
         key: path,
-        message,
-        location: (located && inner.line() > 0).then(|| (inner.line(), inner.column())),
+        message: plain_types(&message),
+        location,
     }
+}
+
+/// serde's type names in words a scene's author uses.
+fn plain_types(message: &str) -> String {
+    message
+        .replace("expected f64", "expected a number")
+        .replace("expected u64", "expected a whole number >= 0")
+        .replace("expected i64", "expected a whole number")
+        .replace("expected u32", "expected a whole number >= 0")
+}
+
+/// `[x, y, z]` as typed (see [`show`]).
+fn show3(v: [f64; 3]) -> String {
+    format!("[{}, {}, {}]", show(v[0]), show(v[1]), show(v[2]))
 }
 
 struct Check<'a> {
@@ -230,7 +280,7 @@ impl Check<'_> {
         if v.is_finite() && ok(v) {
             Ok(v)
         } else {
-            Err(self.fail(key, v, allowed))
+            Err(self.fail(key, show(v), allowed))
         }
     }
 
@@ -238,7 +288,7 @@ impl Check<'_> {
         if v.iter().all(|c| c.is_finite()) {
             Ok(Vec3::new(v[0], v[1], v[2]))
         } else {
-            Err(self.fail(key, format!("{v:?}"), "three finite numbers"))
+            Err(self.fail(key, show3(v), "three finite numbers"))
         }
     }
 }
@@ -395,11 +445,7 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         let normal = ck.vec3("plane.normal", p.normal)?;
         let len = normal.norm();
         if !(len > 0.0 && len.is_finite()) {
-            return Err(ck.fail(
-                "plane.normal",
-                format!("{:?}", p.normal),
-                "a non-zero vector",
-            ));
+            return Err(ck.fail("plane.normal", show3(p.normal), "a non-zero vector"));
         }
         colliders.push(Collider::Plane(Plane {
             point: ck.vec3("plane.point", p.point)?,

@@ -4,10 +4,7 @@
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SolveError {
     /// A position became NaN or infinite: the run diverged.
-    #[error(
-        "the simulation diverged: point {point} (column {x}, row {y}) is no longer finite; \
-         lower ks or raise the steps per frame, then reset"
-    )]
+    #[error("the simulation diverged: point {point} (column {x}, row {y}) is no longer finite")]
     NonFinite {
         /// Index of the first bad point.
         point: usize,

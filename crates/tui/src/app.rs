@@ -38,7 +38,8 @@ use sim::Simulation;
 /// Arguments of `clothsim tui` (and of `clothsim` with none).
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// A bundled scene name (see `clothsim scenes`) or a path to a scene JSON file.
+    /// A bundled scene name (see `clothsim scenes`) or a scene JSON file; a path with a folder
+    /// or ending in .json is always a file (`./plane` is the file, `plane` the bundled scene).
     #[arg(default_value = "pinned4", value_hint = clap::ValueHint::FilePath)]
     pub scene: String,
     /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).

@@ -180,6 +180,14 @@ fn time_grid(
     params: &StepParams,
     n: usize,
 ) -> anyhow::Result<Vec<Row>> {
+    // Checked here, so the message gives the number as typed rather than an overflowed square.
+    let max = cloth_mesh::MAX_POINTS;
+    if n < 2 || n.checked_mul(n).is_none_or(|points| points > max) {
+        anyhow::bail!(
+            "--grid {n}: the cloth must have 2 to {} points per side ({max} points in all)",
+            max.isqrt()
+        );
+    }
     let mesh = pinned_grid(n).with_context(|| format!("--grid {n}"))?;
     let run = BenchRun {
         warmup_frames: 90,
@@ -343,6 +351,8 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             out.push('\n');
         }
     }
-    println!("{}", out.trim_end());
-    Ok(())
+    let mut stdout = crate::output::Stdout::new();
+    stdout.write_all_or_fail(out.trim_end().as_bytes())?;
+    stdout.write_all_or_fail(b"\n")?;
+    stdout.finish()
 }

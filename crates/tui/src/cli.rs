@@ -9,7 +9,6 @@
 
 use std::ffi::OsString;
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::PathBuf;
 use std::str::FromStr;
 
@@ -90,10 +89,7 @@ impl Cli {
             Some(Command::Simulate(args)) => simulate::run(&args, registry),
             Some(Command::Render(args)) => render::run(&args, registry),
             Some(Command::Bench(args)) => bench::run(&args, registry),
-            Some(Command::Scenes) => {
-                scenes::run();
-                Ok(())
-            }
+            Some(Command::Scenes) => scenes::run(),
             Some(Command::Solvers) => print(solvers::listing(registry).as_bytes()),
             Some(Command::Completions { shell }) => print(&completions(registry, shell)),
             Some(Command::Man { dir: None }) => print(&man_page(registry)?),
@@ -149,15 +145,12 @@ fn with_solver_values(cmd: clap::Command, values: &[PossibleValue]) -> clap::Com
     cmd.mut_subcommands(|sub| with_solver_values(sub, values))
 }
 
-/// Writes `bytes` to stdout; a reader that went away (`| head`) is a normal end.
+/// Writes `bytes` to stdout through the one output path: a reader that went away (`| head`)
+/// is a normal end, any other write error is an error.
 fn print(bytes: &[u8]) -> anyhow::Result<()> {
-    let mut out = std::io::stdout().lock();
-    match out.write_all(bytes).and_then(|()| out.flush()) {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
-            Err(e).context("cannot write to stdout")
-        }
-        _ => Ok(()),
-    }
+    let mut out = crate::output::Stdout::new();
+    out.write_all_or_fail(bytes)?;
+    out.finish()
 }
 
 /// The manual page of `clothsim` (roff), its commands listed.

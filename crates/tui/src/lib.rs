@@ -22,7 +22,9 @@
 mod app;
 mod bench;
 mod cli;
+mod headless;
 mod output;
+mod progress;
 mod render;
 mod scenes;
 mod simulate;
@@ -30,6 +32,7 @@ mod solvers;
 mod steal;
 
 use std::ffi::OsString;
+use std::io::{IsTerminal as _, Write as _};
 use std::process::ExitCode;
 
 pub use cloth_solver::{Registry, SolverEntry};
@@ -59,16 +62,50 @@ where
         );
     let cli = match cli::parse(registry, args) {
         Ok(cli) => cli,
-        Err(e) => {
-            // Help and version are "errors" to clap that print to stdout and succeed.
-            let _ = e.print();
-            return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
-        }
+        Err(e) => return clap_exit(&program, &e),
     };
     match cli.run(registry) {
         Ok(()) => ExitCode::SUCCESS,
+        // A reader that stops early (`| head`) is a normal end.
+        Err(e) if output::ended_by_reader(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("{program}: error: {e:#}");
+            // Nowhere is left to report a failure to write to stderr; the exit code still says it.
+            let _ = writeln!(std::io::stderr(), "{program}: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Prints clap's help, version or usage error through the same output path as the commands:
+/// help and version go to standard output (a reader that went away ends quietly, a full disk
+/// or a closed standard output is an error), usage errors to stderr with clap's exit code.
+fn clap_exit(program: &str, e: &clap::Error) -> ExitCode {
+    let styled = e.render();
+    let color = std::env::var_os("NO_COLOR").is_none();
+    if e.use_stderr() {
+        let mut err = std::io::stderr();
+        let text = if color && err.is_terminal() {
+            styled.ansi().to_string()
+        } else {
+            styled.to_string()
+        };
+        let _ = err.write_all(text.as_bytes());
+        return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
+    }
+    let text = if color && output::Stdout::is_terminal() {
+        styled.ansi().to_string()
+    } else {
+        styled.to_string()
+    };
+    let mut out = output::Stdout::new();
+    let written = out
+        .write_all_or_fail(text.as_bytes())
+        .and_then(|()| out.finish());
+    match written {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) if output::ended_by_reader(&e) => ExitCode::SUCCESS,
+        Err(e) => {
+            let _ = writeln!(std::io::stderr(), "{program}: error: {e:#}");
             ExitCode::FAILURE
         }
     }

@@ -5,18 +5,18 @@
 //! terminal modes, so it works the same into a pipe or a file.
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::str::FromStr;
 
-use anyhow::Context;
-use cloth_mesh::ClothState;
+use cloth_mesh::{ClothState, Collider, Vec3};
 use cloth_render::{
     AsciiFrame, Bounds, ColorChoice, ColorDepth, Extent, FrameSize, Mode, RenderError,
     RenderOptions, Renderer, View, ViewSpec,
 };
-use cloth_solver::{Registry, advance_frame};
+use cloth_solver::Registry;
 
-use crate::solvers;
+use crate::output::Stdout;
+use crate::progress::{Progress, When};
+use crate::{headless, solvers};
 
 /// Columns between the panels of `--view all`.
 const GAP: &str = " | ";
@@ -68,7 +68,8 @@ pub enum Format {
 /// Arguments of `clothsim render`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A bundled scene name (see `clothsim scenes`) or a path to a scene JSON file.
+    /// A bundled scene name (see `clothsim scenes`) or a scene JSON file; a path with a folder
+    /// or ending in .json is always a file (`./plane` is the file, `plane` the bundled scene).
     #[arg(value_hint = clap::ValueHint::FilePath)]
     scene: String,
     /// Frames to simulate (each 1/frames_per_sec seconds of simulated time); 0 shows the start.
@@ -101,11 +102,25 @@ pub struct Args {
     /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).
     #[arg(long)]
     solver: Option<String>,
+    /// Progress on stderr: auto (a bar when stderr is a terminal and the frames go elsewhere),
+    /// always (also a line every 10 s when stderr is not a terminal), never. `--progress` alone
+    /// means always.
+    #[arg(long, value_enum, value_name = "WHEN", default_value_t = When::Auto,
+          num_args = 0..=1, default_missing_value = "always")]
+    progress: When,
 }
 
 /// Whether frame `f` (1-based; 0 is the start) of `frames` is printed.
 fn printed(f: u64, frames: u64, every: Option<u64>) -> bool {
     f == frames || every.is_some_and(|k| f > 0 && f.is_multiple_of(k))
+}
+
+/// How many frames of `frames` are printed (see [`printed`]).
+fn printed_count(frames: u64, every: Option<u64>) -> u64 {
+    match every {
+        Some(k) if frames > 0 => frames / k + u64::from(!frames.is_multiple_of(k)),
+        _ => 1,
+    }
 }
 
 /// Runs the command.
@@ -128,29 +143,29 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         ..RenderOptions::default()
     };
 
-    // First pass: the box around every printed frame, so the views keep one scale and the
-    // animation does not jump. The simulation is deterministic, so the second pass replays
-    // exactly the same states.
-    let mut extent: Option<Bounds> = None;
-    simulate(&scene, &choice, args, |_, state| {
-        let b = Bounds::of_scene(&state.positions, &scene.colliders)?;
-        extent = Some(extent.map_or(b, |e| e.union(&b)));
-        Ok(())
-    })?;
-    let Some(extent) = extent else {
-        return Ok(());
+    headless::note_shadowing(&args.scene);
+    // One pass: frames are written as they are made. A single frame is fitted on its own. For
+    // an animation, the extent starts as where the scene can take the cloth (see
+    // `predicted_extent`), so the views keep one scale, and grows should the cloth go further.
+    let mut extent = if printed_count(args.frames, args.every) > 1 {
+        Some(predicted_extent(&scene, args.frames)?)
+    } else {
+        None
     };
-
     let mut renderer = Renderer::new();
     let mut panels: Vec<AsciiFrame> = views.iter().map(|_| AsciiFrame::new(args.size)).collect();
     let mut text = String::new();
-    let stdout = std::io::stdout();
-    let mut out = std::io::BufWriter::new(stdout.lock());
+    let mut out = Stdout::new();
     let mut first = true;
-    let result = simulate(&scene, &choice, args, |_, state| {
+    simulate(&scene, &choice, args, |_, state| {
+        let now = Bounds::of_scene(&state.positions, &scene.colliders)?;
+        let fitted = extent.map_or(now, |e| e.union(&now));
+        if extent.is_some() {
+            extent = Some(fitted);
+        }
         for (view, panel) in views.iter().zip(panels.iter_mut()) {
             let spec = ViewSpec {
-                extent: Extent::Fixed(extent),
+                extent: Extent::Fixed(fitted),
                 ..ViewSpec::new(*view, &scene.mesh)
             };
             renderer.render(&scene.mesh, state, &scene.colliders, &spec, &options, panel)?;
@@ -165,20 +180,76 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         } else {
             side_by_side(&views, &panels, args.size, depth, &mut text)?;
         }
-        out.write_all(text.as_bytes())?;
-        Ok(())
-    })
-    .and_then(|()| out.flush().map_err(anyhow::Error::from));
-    match result {
-        // A reader that stops early (`| head`) is not an error.
-        Err(e)
-            if e.downcast_ref::<std::io::Error>()
-                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) =>
-        {
-            Ok(())
-        }
-        other => other.context("cannot write the frames to stdout"),
+        // A reader that stops early (`| head`) ends the run here: main treats it as a
+        // normal end. Each frame is flushed, so a reader sees it as soon as it is made.
+        out.write_all_or_fail(text.as_bytes())?;
+        out.flush_or_fail()
+    })?;
+    out.finish()
+}
+
+/// Where the scene can take the cloth in `frames` frames, as the box the views are fitted to.
+///
+/// The start (cloth, spheres and the floor under them), grown along gravity by how far the
+/// cloth can go: a pinned cloth hangs at most 1.1 times (the stretch limit) its longest reach
+/// from a pin below its pins; a free cloth falls `g t^2 / 2` in the run's time, or, when a
+/// collider is there to catch it, at most 1.1 times its own diagonal. A floor facing up stops
+/// the fall. The cloth rarely fills the whole box, and when it leaves it (a swing past the
+/// vertical) the box grows from that frame on.
+fn predicted_extent(scene: &cloth_scene::Scene, frames: u64) -> anyhow::Result<Bounds> {
+    let start = ClothState::new(&scene.mesh);
+    let solid = Bounds::of_solids(&start.positions, &scene.colliders)?;
+    let cloth = Bounds::of_points(&start.positions)?.unwrap_or(solid);
+    let g = scene.params.gravity;
+    let g_size = g.norm();
+    if g_size == 0.0 || !g_size.is_finite() {
+        return Ok(solid.with_floors(&solid, &scene.colliders));
     }
+    let down = g / g_size;
+    let pins: Vec<Vec3> = scene
+        .mesh
+        .pinned()
+        .iter()
+        .zip(&start.positions)
+        .filter_map(|(&p, x)| p.then_some(*x))
+        .collect();
+    let reach = if pins.is_empty() {
+        let t = frames as f64 / scene.params.frames_per_sec;
+        let fall = 0.5 * g_size * t * t;
+        if scene.colliders.is_empty() {
+            fall
+        } else {
+            fall.min(1.1 * cloth.diagonal())
+        }
+    } else {
+        // NOTE: the distance to a subset of the pins is at least the distance to the nearest
+        // pin, so at most 64 of them keep this an upper bound at a bounded cost.
+        let stride = pins.len().div_ceil(64);
+        let nearest = |x: &Vec3| {
+            pins.iter()
+                .step_by(stride)
+                .map(|p| (x - p).norm())
+                .fold(f64::INFINITY, f64::min)
+        };
+        1.1 * start.positions.iter().map(nearest).fold(0.0, f64::max)
+    };
+    let shift = down * reach;
+    let mut fallen = Bounds {
+        min: cloth.min + shift,
+        max: cloth.max + shift,
+    };
+    for c in &scene.colliders {
+        // A floor facing against gravity stops the fall at its height.
+        if let Collider::Plane(p) = c
+            && p.normal.dot(&down) < -0.99
+            && down.y < -0.99
+        {
+            fallen.min.y = fallen.min.y.max(p.point.y);
+            fallen.max.y = fallen.max.y.max(fallen.min.y);
+        }
+    }
+    let predicted = solid.union(&fallen);
+    Ok(predicted.with_floors(&predicted, &scene.colliders))
 }
 
 /// Simulates `args.frames` frames, calling `each` with the frame number and state of every
@@ -191,23 +262,36 @@ fn simulate(
 ) -> anyhow::Result<()> {
     let mut solver = choice.build(&scene.mesh)?;
     let mut state = ClothState::new(&scene.mesh);
-    if printed(0, args.frames, args.every) {
-        each(0, &state)?;
-    }
-    for f in 1..=args.frames {
-        advance_frame(
-            solver.as_mut(),
-            &scene.mesh,
-            &scene.colliders,
-            &scene.params,
-            &mut state,
-        )
-        .with_context(|| format!("{}: frame {f} of {}", scene.origin, args.frames))?;
-        if printed(f, args.frames, args.every) {
-            each(f, &state)?;
+    let mut progress = Progress::new(
+        args.progress,
+        &scene.origin,
+        args.frames,
+        scene.params.steps_per_frame,
+        Stdout::is_terminal(),
+    );
+    let mut run = || -> anyhow::Result<()> {
+        if printed(0, args.frames, args.every) {
+            each(0, &state)?;
         }
-    }
-    Ok(())
+        for f in 1..=args.frames {
+            headless::advance_frame(
+                solver.as_mut(),
+                scene,
+                &scene.params,
+                choice.entry.is_explicit(),
+                &mut state,
+                (f, args.frames),
+                &mut progress,
+            )?;
+            if printed(f, args.frames, args.every) {
+                each(f, &state)?;
+            }
+        }
+        Ok(())
+    };
+    let result = run();
+    progress.finish();
+    result
 }
 
 /// Writes the panels next to each other under a label line naming each view and its axes.
@@ -257,6 +341,17 @@ mod tests {
         let shown: Vec<u64> = (0..=10).filter(|&f| printed(f, 10, None)).collect();
         assert_eq!(shown, vec![10]);
         assert!(printed(0, 0, None), "--frames 0 shows the start");
+        for (frames, every) in [
+            (10, Some(4)),
+            (10, None),
+            (0, None),
+            (0, Some(3)),
+            (8, Some(4)),
+            (3, Some(5)),
+        ] {
+            let counted = (0..=frames).filter(|&f| printed(f, frames, every)).count() as u64;
+            assert_eq!(printed_count(frames, every), counted, "{frames} {every:?}");
+        }
     }
 
     #[test]

@@ -1,20 +1,21 @@
 //! `clothsim simulate`: run a scene headless and write its final state.
 
 use std::fmt::Write as _;
-use std::io::{IsTerminal, Write as _};
+use std::io::Write as _;
 use std::path::PathBuf;
 
-use anyhow::Context;
 use cloth_mesh::{ClothMesh, ClothState, vertex_normals};
-use cloth_solver::{Registry, advance_frame};
+use cloth_solver::Registry;
 use serde::Serialize;
 
-use crate::{output, solvers};
+use crate::progress::{Progress, When};
+use crate::{headless, output, solvers};
 
 /// Arguments of `clothsim simulate`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A bundled scene name (see `clothsim scenes`) or a path to a scene JSON file.
+    /// A bundled scene name (see `clothsim scenes`) or a scene JSON file; a path with a folder
+    /// or ending in .json is always a file (`./plane` is the file, `plane` the bundled scene).
     #[arg(value_hint = clap::ValueHint::FilePath)]
     scene: String,
     /// Frames to simulate (each 1/frames_per_sec seconds of simulated time).
@@ -30,6 +31,11 @@ pub struct Args {
     /// Without it, JSON goes to stdout.
     #[arg(long, value_name = "FILE", value_hint = clap::ValueHint::FilePath)]
     out: Option<PathBuf>,
+    /// Progress on stderr: auto (a bar when stderr is a terminal), always (also a line every
+    /// 10 s when it is not: logs, CI), never. `--progress` alone means always.
+    #[arg(long, value_enum, value_name = "WHEN", default_value_t = When::Auto,
+          num_args = 0..=1, default_missing_value = "always")]
+    progress: When,
 }
 
 /// The JSON written by `simulate`.
@@ -66,29 +72,44 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             ),
         },
     };
+    if let Some(path) = &args.out {
+        // Before the run, so a long simulation does not end in a folder given as the file.
+        output::check_target(path)?;
+        output::cleanup_on_signals()?;
+    }
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
-    let mut solver =
-        solvers::choose(registry, &scene, args.solver.as_deref())?.build(&scene.mesh)?;
+    headless::note_shadowing(&args.scene);
+    let choice = solvers::choose(registry, &scene, args.solver.as_deref())?;
+    let mut solver = choice.build(&scene.mesh)?;
+    let explicit = choice.entry.is_explicit();
     let mut state = ClothState::new(&scene.mesh);
     let params = scene.params;
 
-    let progress = progress_bar(args.frames);
-    for frame in 0..args.frames {
-        advance_frame(
+    // The bar would share the terminal with JSON on standard output only when both are the
+    // terminal and there is no --out; it is cleared at the end, before the JSON is written.
+    let mut progress = Progress::new(
+        args.progress,
+        &scene.origin,
+        args.frames,
+        params.steps_per_frame,
+        false,
+    );
+    for frame in 1..=args.frames {
+        let advanced = headless::advance_frame(
             solver.as_mut(),
-            &scene.mesh,
-            &scene.colliders,
+            &scene,
             &params,
+            explicit,
             &mut state,
-        )
-        .with_context(|| format!("{}: frame {} of {}", scene.origin, frame + 1, args.frames))?;
-        if let Some(p) = &progress {
-            p.inc(1);
+            (frame, args.frames),
+            &mut progress,
+        );
+        if let Err(e) = advanced {
+            progress.finish();
+            return Err(e);
         }
     }
-    if let Some(p) = progress {
-        p.finish_and_clear();
-    }
+    progress.finish();
 
     let bytes = match format {
         Format::Json => {
@@ -106,27 +127,17 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         Format::Obj => obj(&scene.mesh, &state, &scene.origin).into_bytes(),
     };
     if let Some(path) = &args.out {
-        output::write_atomic(path, &bytes)
+        let written = output::write_atomic(path, &bytes)?;
+        if let Some(note) = written.note() {
+            // Nowhere else to say it; a lost note does not change the result.
+            let _ = writeln!(std::io::stderr(), "clothsim: note: {note}");
+        }
+        Ok(())
     } else {
-        let mut out = std::io::stdout().lock();
-        out.write_all(&bytes)
-            .and_then(|()| out.flush())
-            .context("cannot write to stdout")
+        let mut out = output::Stdout::new();
+        out.write_all_or_fail(&bytes)?;
+        out.finish()
     }
-}
-
-/// A progress bar on stderr for runs long enough to want one, only when stderr is a terminal.
-fn progress_bar(frames: u64) -> Option<indicatif::ProgressBar> {
-    if frames < 30 || !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let bar = indicatif::ProgressBar::new(frames);
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames ({eta} left)")
-    {
-        bar.set_style(style);
-    }
-    Some(bar)
 }
 
 /// A Wavefront OBJ of the cloth: vertices, area-weighted normals and the mesh's triangles.

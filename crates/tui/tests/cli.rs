@@ -159,7 +159,7 @@ fn bad_input_is_one_clear_message_and_a_non_zero_exit() {
         ),
         (
             vec!["simulate".into(), "nosuchscene".into()],
-            "no scene file or bundled scene named",
+            "no bundled scene named \"nosuchscene\" and no file nosuchscene",
         ),
         (
             vec![

@@ -157,9 +157,9 @@ fn physical_values_out_of_range_are_rejected() {
         ("cloth.width=0", "cloth.width is 0"),
         (
             "cloth.width=1e-12",
-            "cloth.width is 0.000000000001, but it must be a finite number from 1e-9 to 1e9 (metres)",
+            "cloth.width is 1e-12, but it must be a finite number from 1e-9 to 1e9 (metres)",
         ),
-        ("cloth.height=2e9", "cloth.height is 2000000000"),
+        ("cloth.height=2e9", "cloth.height is 2e9"),
         (
             "simulation.simulation_steps=0",
             "simulation.simulation_steps is 0",
@@ -183,7 +183,7 @@ fn non_finite_numbers_are_rejected() {
         .replace("\"ks\": 5000.0", "\"ks\": 1e999");
     let e = parse(&text, "inf.json", &[]).unwrap_err().to_string();
     assert!(
-        e.contains("inf.json") && e.contains("number out of range"),
+        e.starts_with("inf.json: cloth.ks: the number is out of range"),
         "{e}"
     );
     let e = err(&["cloth.ks=1e999"]);
@@ -220,7 +220,7 @@ fn bad_objects_are_rejected() {
         .to_string();
     assert_eq!(
         e,
-        "plane: plane.normal is [0.0, 0.0, 0.0], but it must be a non-zero vector"
+        "plane: plane.normal is [0, 0, 0], but it must be a non-zero vector"
     );
     let e = load("plane", &["plane.friction=-0.5".into()])
         .unwrap_err()
@@ -243,7 +243,7 @@ fn unreadable_files_and_unknown_names_are_explained() {
     );
     let e = load("pinned5", &[]).unwrap_err().to_string();
     assert!(e.starts_with(
-        "no scene file or bundled scene named \"pinned5\"; bundled scenes: pinned2, pinned4"
+        "no bundled scene named \"pinned5\" and no file pinned5; bundled scenes: pinned2, pinned4"
     ));
 }
 

@@ -583,15 +583,16 @@ fn save(app: &mut App, path: &std::path::Path) -> anyhow::Result<()> {
     );
     let mut text = serde_json::to_string_pretty(&file)?;
     text.push('\n');
-    output::write_atomic(path, text.as_bytes())?;
-    app.say(
-        Level::Info,
-        format!(
-            "saved to {} (load it with: clothsim tui {})",
-            path.display(),
-            path.display()
-        ),
+    let written = output::write_atomic(path, text.as_bytes())?;
+    let saved = format!(
+        "saved to {} (load it with: clothsim tui {})",
+        path.display(),
+        path.display()
     );
+    match written.note() {
+        Some(note) => app.say(Level::Warn, format!("{saved}; {note}")),
+        None => app.say(Level::Info, saved),
+    }
     Ok(())
 }
 

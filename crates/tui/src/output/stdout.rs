@@ -1,0 +1,171 @@
+//! Standard output for results, with the errors a user can act on.
+//!
+//! The Rust runtime ignores SIGPIPE, so a reader that went away shows up as a `BrokenPipe`
+//! write error: that is a normal end of the command (exit 0, nothing said), as for `cat` or
+//! `ripgrep`. Every other write error is reported once, naming standard output and the cause.
+//!
+//! A standard output closed before the program started (`clothsim scenes >&-`) needs care: the
+//! runtime quietly reopens descriptors 0 to 2 on `/dev/null` before `main`, so writes would
+//! succeed and the output vanish. A constructor that runs before the runtime notes whether
+//! descriptor 1 was open, and [`Stdout`] refuses to write when it was not.
+
+use std::io::{self, IsTerminal, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Set before `main` when descriptor 1 was closed at start (see the module doc).
+static CLOSED_AT_START: AtomicBool = AtomicBool::new(false);
+
+/// Notes whether standard output was open when the process started.
+///
+/// Runs from the platform's initialiser list, before the Rust runtime replaces a closed
+/// descriptor with `/dev/null`.
+#[cfg(unix)]
+extern "C" fn note_closed_stdout() {
+    // SAFETY: `fcntl(F_GETFD)` only reads the descriptor's flags; it touches no memory of ours
+    // and is safe to call before the Rust runtime has started.
+    #[allow(unsafe_code)]
+    let flags = unsafe { libc::fcntl(libc::STDOUT_FILENO, libc::F_GETFD) };
+    if flags == -1 {
+        CLOSED_AT_START.store(true, Ordering::Relaxed);
+    }
+}
+
+// NOTE: `.init_array` (ELF) and `__mod_init_func` (Mach-O) entries run before `main` and before
+// the Rust runtime's own start-up, which is what this check needs. `#[used]` keeps the entry
+// alive although nothing names it.
+#[cfg(any(
+    target_os = "linux",
+    target_os = "android",
+    target_os = "freebsd",
+    target_os = "netbsd",
+    target_os = "openbsd",
+    target_os = "dragonfly",
+    target_os = "illumos",
+    target_os = "solaris"
+))]
+#[allow(unsafe_code)]
+#[used]
+#[unsafe(link_section = ".init_array")]
+static NOTE_CLOSED_STDOUT: extern "C" fn() = note_closed_stdout;
+
+#[cfg(any(target_os = "macos", target_os = "ios"))]
+#[allow(unsafe_code)]
+#[used]
+#[unsafe(link_section = "__DATA,__mod_init_func")]
+static NOTE_CLOSED_STDOUT: extern "C" fn() = note_closed_stdout;
+
+/// Whether standard output was closed when clothsim started.
+fn closed_at_start() -> bool {
+    CLOSED_AT_START.load(Ordering::Relaxed)
+}
+
+/// A write to standard output failed.
+///
+/// Its message says what failed and why, once (it has no `source`, so `{:#}` does not repeat
+/// the cause).
+#[derive(Debug)]
+pub struct StdoutError(io::Error);
+
+impl std::fmt::Display for StdoutError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if closed_at_start() {
+            write!(
+                f,
+                "cannot write the results: standard output is closed \
+                 (redirect it to a file or a pipe instead of closing it)"
+            )
+        } else {
+            write!(f, "cannot write to standard output: {}", self.0)
+        }
+    }
+}
+
+impl std::error::Error for StdoutError {}
+
+/// The error for a failed write to standard output, ready to return from a command.
+pub fn stdout_error(e: io::Error) -> anyhow::Error {
+    anyhow::Error::new(StdoutError(e))
+}
+
+/// Whether `e` is standard output's reader having gone away: a normal end, not a failure.
+pub fn ended_by_reader(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<StdoutError>()
+            .is_some_and(|s| s.0.kind() == io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// Buffered standard output that refuses to write into a closed one (see the module doc).
+///
+/// Errors come back as [`io::Error`]s; turn them into the command's error with
+/// [`stdout_error`] (the `?` on [`Stdout::write_all_or_fail`] and [`Stdout::finish`] does it).
+pub struct Stdout {
+    out: io::BufWriter<io::StdoutLock<'static>>,
+}
+
+impl Stdout {
+    /// Standard output, locked for this command.
+    pub fn new() -> Self {
+        Self {
+            out: io::BufWriter::with_capacity(64 * 1024, io::stdout().lock()),
+        }
+    }
+
+    /// Whether standard output is a terminal.
+    pub fn is_terminal() -> bool {
+        !closed_at_start() && io::stdout().is_terminal()
+    }
+
+    /// Writes `bytes`, as the command's error on failure.
+    ///
+    /// # Errors
+    /// [`StdoutError`] (see [`ended_by_reader`] for the normal end).
+    pub fn write_all_or_fail(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
+        self.write_all(bytes).map_err(stdout_error)
+    }
+
+    /// Sends what is buffered on its way (a frame to a waiting reader), as the command's error
+    /// on failure.
+    ///
+    /// # Errors
+    /// As [`Stdout::write_all_or_fail`].
+    pub fn flush_or_fail(&mut self) -> anyhow::Result<()> {
+        self.flush().map_err(stdout_error)
+    }
+
+    /// Flushes what is buffered, as the command's error on failure.
+    ///
+    /// # Errors
+    /// As [`Stdout::write_all_or_fail`].
+    pub fn finish(mut self) -> anyhow::Result<()> {
+        self.flush().map_err(stdout_error)
+    }
+}
+
+impl Default for Stdout {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Write for Stdout {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        if closed_at_start() {
+            return Err(io::Error::new(
+                io::ErrorKind::NotConnected,
+                "standard output is closed",
+            ));
+        }
+        self.out.write(buf)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        if closed_at_start() {
+            return Err(io::Error::new(
+                io::ErrorKind::NotConnected,
+                "standard output is closed",
+            ));
+        }
+        self.out.flush()
+    }
+}
