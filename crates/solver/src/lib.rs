@@ -15,6 +15,7 @@
 mod diagnostics;
 mod disjoint;
 mod error;
+mod reference;
 mod registry;
 mod self_collision;
 mod stretch;
@@ -42,6 +43,7 @@ pub use cloth_mesh::{
 };
 pub use diagnostics::{kinetic_energy, max_stretch_ratio};
 pub use error::SolveError;
+pub use reference::reference_step;
 pub use registry::{
     BuildSolver, OptionError, OptionKind, Registry, SolverEntry, SolverOption, UnknownSolver,
 };
