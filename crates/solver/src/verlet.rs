@@ -2,7 +2,7 @@
 //!
 //! # Method
 //!
-//! One step of `dt = 1 / (fps * steps_per_frame)` seconds, in the course's order:
+//! One step of `dt = 1 / fps / steps_per_frame` seconds, in the course's order:
 //!
 //! 1. `F_i = m g + sum_springs k (|x_a - x_b| - L) u`, `k = ks` (structural, shearing) or
 //!    `0.2 ks` (bending), disabled types skipped;

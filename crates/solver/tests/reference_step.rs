@@ -224,3 +224,13 @@ fn the_reference_and_the_fast_path_agree_on_a_crumpled_cloth_with_crowded_boxes(
         same_bits_as_the_reference(&case, &mut solver).unwrap();
     }
 }
+
+#[test]
+fn the_time_step_is_the_courses_one_over_fps_over_steps() {
+    // The course computes `1.0 / frames_per_sec / simulation_steps`, two roundings in that
+    // order; `1 / (fps * steps)` lands one ulp away at the defaults, which a run of 2,700 steps
+    // turns into visible bits.
+    let params = StepParams::default();
+    assert_eq!(params.dt().to_bits(), (1.0f64 / 90.0 / 30.0).to_bits());
+    assert_ne!(params.dt().to_bits(), (1.0f64 / (90.0 * 30.0)).to_bits());
+}
