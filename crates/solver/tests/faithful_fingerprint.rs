@@ -22,15 +22,15 @@ const FRAMES: usize = 90;
 /// every column and every row), plus the sums of all coordinates, which catch a change anywhere.
 const STRIDE: usize = 7;
 
-/// The course's standard cloth (spec section 1): 1 x 1 m, 50 x 50 points, thickness 0.0095 m,
-/// horizontal, with the given pins.
+/// The course's standard cloth (spec section 1): 1 x 1 m, 50 x 50 points, thickness 0.0095 m
+/// read as the course's loader reads it (a 32-bit float), horizontal, with the given pins.
 fn mesh(pins: &[(usize, usize)]) -> ClothMesh {
     ClothMesh::new(&GridSpec {
         width: 1.0,
         height: 1.0,
         num_width_points: 50,
         num_height_points: 50,
-        thickness: 0.0095,
+        thickness: f64::from(0.0095_f32),
         orientation: Orientation::Horizontal,
         pinned: pins.to_vec(),
         ..GridSpec::default()
