@@ -1,6 +1,6 @@
 //! Times frames of the Verlet solver on one configuration, for profiling
 //! (`perf stat`, `perf record`): `cargo run --release -p cloth-solver --example frames --
-//! <grid points per side> <self-collision on|off> <frames> [threads] [faithful|parallel|colored]`.
+//! <grid points per side> <self-collision on|off> <frames> [threads] [faithful|parallel|colored] [warm-up frames]`.
 
 use cloth_bench::{BenchRun, pinned_grid, time_frames};
 use cloth_mesh::ClothState;
@@ -21,6 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             return Err(format!("unknown order {other:?}: faithful, parallel or colored").into());
         }
     };
+    let warmup_frames: u32 = arg(5, "90").parse()?;
     let mesh = pinned_grid(n)?;
     let params = StepParams {
         self_collision,
@@ -35,7 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &params,
         &mut state,
         BenchRun {
-            warmup_frames: 90,
+            warmup_frames,
             frames,
         },
     )?;
