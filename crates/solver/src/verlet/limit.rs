@@ -55,8 +55,6 @@ enum RowBuild {
     Portable,
     /// `prepass::marks_row_avx2`.
     Avx2,
-    /// `prepass::marks_row_avx512vl`: the same operations with 32 vector registers.
-    Avx512Vl,
 }
 
 /// What every band reads.
@@ -228,15 +226,10 @@ impl BandScratch {
     ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
-            let build = if super::sweep::avx512vl() {
-                RowBuild::Avx512Vl
-            } else {
-                RowBuild::Avx2
-            };
-            // SAFETY: the CPU supports AVX2, and AVX-512VL for that build, checked just above.
+            // SAFETY: the CPU supports AVX2, checked just above.
             #[allow(unsafe_code)]
             unsafe {
-                self.prepass_avx2(bounds, stencil, positions, first, rows, build);
+                self.prepass_avx2(bounds, stencil, positions, first, rows, RowBuild::Avx2);
             }
             return;
         }
@@ -295,11 +288,6 @@ impl BandScratch {
                 // SAFETY: the CPU runs `build` (this function's contract).
                 RowBuild::Avx2 if y >= 2 && nw >= 4 => unsafe {
                     prepass::marks_row_avx2(&self.soa, floor, a0, out);
-                },
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: as above.
-                RowBuild::Avx512Vl if y >= 2 && nw >= 4 => unsafe {
-                    prepass::marks_row_avx512vl(&self.soa, floor, a0, out);
                 },
                 _ => marks_row(&self.soa, bounds, &mut self.row_marks, nw, y, first, out),
             }
@@ -561,9 +549,6 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             builds.push(run(Some(RowBuild::Avx2)));
-            if super::super::sweep::avx512vl() {
-                builds.push(run(Some(RowBuild::Avx512Vl)));
-            }
         }
         (builds, portable)
     }

@@ -50,14 +50,6 @@ pub(crate) const DIRECTIONS: [(isize, isize, SpringKind); 6] = [
     (0, -2, SpringKind::Bending),
 ];
 
-/// Whether the CPU runs AVX-512VL (with AVX-512F), which the second builds of the 256-bit loops
-/// use for its 32 vector registers (checked once, then a cached flag).
-#[cfg(target_arch = "x86_64")]
-pub(crate) fn avx512vl() -> bool {
-    std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512vl")
-}
-
 /// Which build of the fused pass (`sweep/fused.rs`) a sweep's rows take, if any.
 ///
 /// NOTE: only [`Fused::detect`] (and, in tests, [`Fused::builds`]) make one other than
@@ -72,13 +64,6 @@ enum Build {
     Off,
     /// The pass compiled for AVX2.
     Avx2,
-    /// The same 256-bit pass compiled with AVX-512VL as well: the very same operations, but
-    /// with 32 vector registers instead of 16 (VL encodes AVX-512's extra registers for 256-bit
-    /// operations). The pass keeps about 40 vectors live in a column group (six springs'
-    /// directions and lengths, the constants, the sums), so with 16 it spills and reloads
-    /// them around every division; measured 0.97 x the AVX2 build's `pinned4` step. Full
-    /// 512-bit vectors were slower (see the README).
-    Avx512Vl,
 }
 
 impl Fused {
@@ -89,12 +74,7 @@ impl Fused {
     pub(crate) fn detect() -> Self {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
-            let build = if avx512vl() {
-                Build::Avx512Vl
-            } else {
-                Build::Avx2
-            };
-            return Self(build);
+            return Self(Build::Avx2);
         }
         Self::OFF
     }
@@ -104,7 +84,6 @@ impl Fused {
     pub(crate) fn builds() -> Vec<Self> {
         let best = Self::detect();
         match best.0 {
-            Build::Avx512Vl => vec![Self(Build::Avx2), best],
             Build::Avx2 => vec![best],
             Build::Off => vec![],
         }
@@ -158,14 +137,9 @@ macro_rules! ring_strides {
                     $(
                         (Build::Avx2, $stride) => stencil
                             .emit_sum_integrate_avx2::<$stride>(scratch, params, y, positions, ahead, next),
-                        (Build::Avx512Vl, $stride) => stencil
-                            .emit_sum_integrate_avx512vl::<$stride>(scratch, params, y, positions, ahead, next),
                     )+
                     (Build::Avx2, _) => {
                         stencil.emit_sum_integrate_avx2::<0>(scratch, params, y, positions, ahead, next)
-                    }
-                    (Build::Avx512Vl, _) => {
-                        stencil.emit_sum_integrate_avx512vl::<0>(scratch, params, y, positions, ahead, next)
                     }
                     (Build::Off, _) => unreachable!("no fused pass is run without a build"),
                 }

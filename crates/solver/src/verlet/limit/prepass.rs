@@ -109,10 +109,3 @@ marks_row!(
     marks_row_avx2,
     "avx2"
 );
-
-marks_row!(
-    /// [`marks_row_avx2`] compiled with AVX-512VL as well, for its 32 vector registers (the
-    /// AVX2 build keeps three of its vectors on the stack): the very same 256-bit operations.
-    marks_row_avx512vl,
-    "avx2,avx512f,avx512vl"
-);

@@ -291,10 +291,3 @@ fused_pass!(
     emit_sum_integrate_avx2,
     "avx2"
 );
-
-fused_pass!(
-    /// [`Stencil::emit_sum_integrate_avx2`] compiled with AVX-512VL as well, for its 32
-    /// vector registers (see `Build::Avx512Vl`): the very same 256-bit operations.
-    emit_sum_integrate_avx512vl,
-    "avx2,avx512f,avx512vl"
-);
