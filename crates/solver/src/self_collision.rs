@@ -252,10 +252,10 @@ impl Table {
     }
 }
 
-/// Relayouts take at most one point in this many. A bound on the sort's share, not a measured
-/// crossover: at one point in sixteen of a 256 x 256 cloth, the sort of the 8,192 moves takes
-/// about 0.17 ms here, against about 0.6 ms for a full layout. A cloth whose points change box
-/// wholesale (one jumping to a new place) takes the full layout.
+/// Relayouts take at most one point in this many: a bound on the share of the sort of the
+/// moves (`n log n` in the moves), which stays well under the cost of a full layout below it.
+/// A cloth whose points change box wholesale (one jumping to a new place) takes the full
+/// layout.
 const RELAYOUT_SHARE: usize = 16;
 
 /// A table for `boxes` boxes in use: a quarter full, so the cloth can enter as many boxes again
@@ -419,8 +419,8 @@ unsafe fn keys_avx2(keys: &mut [u64], positions: &[Vec3], size: (f64, f64, f64))
 
 /// The box key of every point into `keys`.
 ///
-/// NOTE: on the caller's thread even when the solver has threads: the pass takes about 1.4 ns a
-/// point, and handing it to a pool cost more than it saved on a 256 x 256 cloth.
+/// NOTE: on the caller's thread even when the solver has threads: the pass is a few
+/// arithmetic operations a point, less than what handing it to a pool costs.
 fn compute_keys(keys: &mut [u64], positions: &[Vec3], size: (f64, f64, f64)) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
@@ -952,9 +952,7 @@ enum Pairs<'a> {
 
 /// The fewest points of a box searched on lanes: below, loading the lanes costs more than the
 /// scalar loops save, above all in a box with a pair within reach, which the scalar search
-/// leaves at that pair (measured: from 8 points, criterion's `self_collision/pass/64`, nine
-/// points a box, took 1.4 x the scalar time; from 16, 1.05 x, and the folded 256 x 256 cloth
-/// gains as much as from 8).
+/// leaves at that pair.
 const LANES_FROM: usize = 16;
 
 /// The lanes a task loads boxes into, when the CPU has them.
@@ -1067,11 +1065,10 @@ impl Repulsion {
     /// `reach` apart, and [`Repulsion::closest_pair_out_of_reach`] would find the box clear
     /// again. A pair's distance changes only by the difference of its two points' moves, which
     /// is unchanged when the same shift is taken off both: so the moves are measured from the
-    /// move of the box's first point. A box carried along by the cloth stays skipped (a
-    /// falling 256 x 256 cloth moves its points several allowances a step, but a box's points
-    /// barely against each other: a third of the looks a step, against looking at every box
-    /// whose points outran their anchors). Why that holds in floating point too: every quantity here and in the displacement
-    /// test (a squared distance, its root, a product) is within a few ulps, under 1e-15
+    /// move of the box's first point. A box carried along by the cloth stays skipped: a
+    /// falling cloth moves its points several allowances a step, but a box's points barely
+    /// against each other. Why that holds in floating point too: every quantity here and in
+    /// the displacement test (a squared distance, its root, a product) is within a few ulps, under 1e-15
     /// relative, of its real value; each term below is shrunk (or, for the reach, grown) by
     /// 1e-12 relative, a thousand times that, and the 4-ulp margin of `reach2_out` lies well
     /// inside it. Taking the shift off a move rounds in proportion to the moves, not to what is

@@ -172,9 +172,8 @@ impl Verlet {
             }
             Some(pool) => {
                 // Two bands per thread: one thread can take a band of a slower one (the threads
-                // are shared with the rest of the machine), while each band's first two rows,
-                // emitted again by the band after, stay few (measured: 0.98 x the two-thread
-                // 256 x 256 frame of four bands per thread, in five pairs of runs).
+                // may share their cores with other processes), while each band's first two
+                // rows, emitted again by the band after, stay few.
                 let bands = (2 * pool.current_num_threads()).min(nh);
                 let rows = nh.div_ceil(bands);
                 self.scratch
@@ -214,10 +213,9 @@ impl Solver for Verlet {
         };
         // NOTE: the whole step runs on one of the pool's threads, and the others spend it
         // polling for its work instead of going to sleep between its threaded passes: a pass
-        // then starts on every thread at once. A sleeping worker took a futex call to wake and
-        // tens of microseconds to run, several times a step (on two threads the kernel had 7 %
-        // of the samples; with the pollers a 256 x 256 step on two threads takes 0.92 x the
-        // time). The pollers are `join` jobs, on the stack: they allocate nothing.
+        // then starts on every thread at once. A sleeping worker takes a futex call to wake and
+        // tens of microseconds to run, several times a step. The pollers are `join` jobs, on
+        // the stack: they allocate nothing.
         let pollers = pool.current_num_threads() - 1;
         let done = AtomicBool::new(false);
         let mut step = || {
@@ -301,7 +299,7 @@ impl Verlet {
         // is not finite then, whatever `keep`), and no later pass makes a non-finite position
         // finite (collisions and corrections add to it or compute from it); a pinned point's
         // last position is only ever kept. So this passes exactly when both arrays are finite,
-        // for half the reads (both arrays were 4 % of a `pinned4` step).
+        // for half the reads.
         let last_finite = match &self.stencil {
             Some(stencil) => stencil.pins.iter().all(|&i| all_finite(&state.last[i..=i])),
             None => all_finite(&state.last),
@@ -346,9 +344,8 @@ fn poll_until(done: &AtomicBool) {
     }
 }
 
-/// Whether every coordinate of `points` is finite, on `pool`'s threads for a big cloth (a
-/// 256 x 256 cloth's positions and last positions took 3 % of a step on one thread), in tasks
-/// of the threaded passes' size.
+/// Whether every coordinate of `points` is finite, on `pool`'s threads for a big cloth, in
+/// tasks of the threaded passes' size.
 fn finite_on(points: &[Vec3], pool: Option<&rayon::ThreadPool>) -> bool {
     match pool {
         Some(pool) if points.len() > PARALLEL_CHUNK => {
@@ -362,8 +359,7 @@ fn finite_on(points: &[Vec3], pool: Option<&rayon::ThreadPool>) -> bool {
 fn all_finite(points: &[Vec3]) -> bool {
     // NOTE: over the coordinates as one flat run of f64s, not point by point, and on AVX2 where
     // the CPU has it: the loop is then a subtraction, a compare and an `and` per four values,
-    // with no shuffles to gather each point's `x y z` (point by point on SSE2 the check was 5 %
-    // of a `pinned4` step).
+    // with no shuffles to gather each point's `x y z`.
     const { assert!(size_of::<Vec3>() == 3 * size_of::<f64>()) };
     // SAFETY: a `Vec3` is nalgebra's `repr(C)` matrix over a `repr(transparent)` array storage,
     // `[[f64; 3]; 1]`: three contiguous f64s with no padding (size checked above), so `n` of

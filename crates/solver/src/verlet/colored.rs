@@ -309,13 +309,7 @@ impl Layout {
 /// cloth a third of the checked springs are over the limit, in no pattern a predictor learns.
 /// Whole-vector loads and stores, rather than a point at a time, because the ends of a group
 /// are consecutive points: 6 loads, 6 stores and about two dozen shuffles in place of 24 scalar
-/// loads with inserts and 24 scalar stores (the 256 x 256 frame without self-collision: 0.77 x
-/// the time with a point-at-a-time gather).
-///
-/// Measured and left out: queueing the springs outside the bound and correcting them four at a
-/// time, so every square root and division does four springs' work (nearly every group holds
-/// one such spring, a third of the lanes). The queued springs must be gathered and scattered a
-/// point at a time, and the frame took 1.3 x as long.
+/// loads with inserts and 24 scalar stores.
 ///
 /// # Safety
 /// The CPU must support AVX2.

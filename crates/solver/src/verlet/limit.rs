@@ -175,8 +175,8 @@ impl BandScratch {
         let look = &mut self.look[..];
         // NOTE: a moved point marks, in each direction, the emitter whose spring ends at it,
         // rather than each emitter reading its six partners' moved flags: corrections are rare
-        // (about 0.3 per point per step on `pinned4`), so twelve marks per correction cost less
-        // than six loads per emitter (measured: 4 % of a `pinned4` step). Marks left for
+        // (well under one per point and step on a hanging cloth), so twelve marks per correction
+        // cost less than six loads per emitter. Marks left for
         // emitters already swept, or outside the band, land in the margins and are never read.
         let mark = |look: &mut [u8], p: usize| {
             let at = margin + p - base;

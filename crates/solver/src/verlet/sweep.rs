@@ -413,8 +413,8 @@ impl Stencil {
             }
         }
         // NOTE: the fused pass integrates pinned points like any other, so they are put back
-        // here, from the list of pins, rather than by testing every point's flag in each row
-        // (that test was 2 % of a `pinned4` step).
+        // here, from the list of pins (a handful), rather than by testing every point's flag
+        // in each row.
         let band = r0 * nw..r1 * nw;
         let first = self.pins.partition_point(|&i| i < band.start);
         for &i in self.pins[first..].iter().take_while(|&&i| i < band.end) {
@@ -485,8 +485,8 @@ impl Stencil {
         // Direction t, component c of emitter row `row`, starting `shift` columns to the right
         // of each point; a row past the last one emits nothing (zeros: subtracting +0.0 leaves
         // every sum unchanged).
-        // NOTE: plain calls, not `array::map`: its closures were not inlined into the AVX2
-        // build and cost about 4 % of a `pinned4` step in call overhead.
+        // NOTE: plain calls, not `array::map`: its closures are not inlined into the AVX2
+        // build, and a call per slice would sit in the loop.
         let term = |row: usize, t: usize, c: usize, shift: isize| -> &[f64] {
             if row >= self.nh {
                 return zeros;

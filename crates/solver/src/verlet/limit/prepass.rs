@@ -49,7 +49,7 @@ macro_rules! marks_row {
             );
             // NOTE: every stream is checked once a row, as a slice of exactly `nw` values, and
             // the loop reads lanes `j..j + 4` of it through a pointer: checking each load (21 a
-            // group, two compares and branches each) was 40 % of the loop's instructions. The
+            // group, two compares and branches each) would outnumber the arithmetic. The
             // pointers are the three rows' (`dy` = 0, 1, 2) plus the direction's `dx`, a
             // constant once the direction loop is unrolled, so nine registers address all 21
             // streams.
