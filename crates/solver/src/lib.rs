@@ -18,6 +18,7 @@ mod error;
 mod reference;
 mod registry;
 mod self_collision;
+mod simd;
 mod stretch;
 mod verlet;
 mod verlet_entry;

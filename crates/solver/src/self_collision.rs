@@ -23,6 +23,8 @@ use layout::Run;
 use memory::Memory;
 use table::Table;
 
+use crate::simd::Simd;
+
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 
@@ -38,7 +40,7 @@ mod lanes {
     pub(super) enum BoxLanes {}
 
     impl BoxLanes {
-        pub(super) fn new() -> Option<Self> {
+        pub(super) fn new(_: crate::simd::Simd) -> Option<Self> {
             None
         }
         pub(super) fn load(&mut self, _: &[Vec3]) {
@@ -95,6 +97,8 @@ mod lanes {
 /// is allocated.
 #[derive(Debug, Default, Clone)]
 pub struct SpatialHash {
+    /// The vector instructions the passes may use, detected when the hash is built.
+    simd: Simd,
     /// Box key of each point, this rebuild's.
     key_of: Vec<u64>,
     /// Box key of each point at the last rebuild.
@@ -365,7 +369,7 @@ mod tests {
 
     #[test]
     fn lanes_find_the_pairs_and_make_the_corrections_of_the_scalar_loops() {
-        let mut scratch = lanes::BoxLanes::new();
+        let mut scratch = lanes::BoxLanes::new(crate::simd::Simd::detect());
         if scratch.is_none() {
             return; // No AVX2 (or not x86-64): no lanes to compare.
         }
@@ -600,7 +604,12 @@ mod tests {
         let mut portable = vec![0; positions.len()];
         keys_portable(&mut portable, &positions, size);
         let mut dispatched = vec![1; positions.len()];
-        compute_keys(&mut dispatched, &positions, size);
+        compute_keys(
+            crate::simd::Simd::detect(),
+            &mut dispatched,
+            &positions,
+            size,
+        );
         assert_eq!(portable, dispatched);
     }
 }

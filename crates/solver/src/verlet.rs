@@ -42,6 +42,7 @@ use rayon::prelude::*;
 
 use crate::params::MAX_STRETCH;
 use crate::self_collision::PARALLEL_CHUNK;
+use crate::simd::{Avx2, Simd};
 use crate::stretch::StretchBands;
 use crate::{
     Collider, SolveError, Solver, SpatialHash, StepParams, StepReport, apply_colliders,
@@ -79,6 +80,8 @@ pub enum ConstraintOrder {
 /// The faithful explicit Verlet solver. Owns only scratch memory and caches.
 #[derive(Debug, Default, Clone)]
 pub struct Verlet {
+    /// The vector instructions the CPU runs, detected when the solver is built.
+    simd: Simd,
     /// Worker threads (`None`: run on the caller's thread).
     pool: Option<Arc<rayon::ThreadPool>>,
     order: ConstraintOrder,
@@ -155,12 +158,14 @@ impl Verlet {
             return;
         };
         let (nw, nh) = (stencil.nw(), stencil.nh());
+        let simd = self.simd;
         let positions = &state.positions;
         let pinned = mesh.pinned();
         match &self.pool {
             None => {
                 self.scratch.resize_with(1, RowScratch::default);
                 stencil.sweep(
+                    simd,
                     &mut self.scratch[0],
                     params,
                     positions,
@@ -188,7 +193,7 @@ impl Verlet {
                         .for_each(|(band, (next, scratch))| {
                             let r0 = band * rows;
                             let r1 = (r0 + rows).min(nh);
-                            stencil.sweep(scratch, params, positions, pinned, next, r0, r1);
+                            stencil.sweep(simd, scratch, params, positions, pinned, next, r0, r1);
                         });
                 });
             }
@@ -238,6 +243,7 @@ impl Verlet {
     ) -> Result<StepReport, SolveError> {
         params.validate()?;
         let mass = mesh.point_mass(params.density);
+        let simd = self.simd;
         let dt = params.dt();
         let sweep = SweepParams {
             k: sweep::DIRECTIONS.map(|(_, _, kind)| params.stiffness(kind)),
@@ -253,7 +259,7 @@ impl Verlet {
             self.stencil = Some(Stencil::new(mesh)?);
             self.bands = StretchBands::new(mesh);
             if let Some(stencil) = &self.stencil {
-                self.stretch = StretchSweep::new(stencil, MAX_STRETCH);
+                self.stretch = StretchSweep::new(stencil, MAX_STRETCH, simd);
             }
         }
         let pins: &[usize] = self.stencil.as_ref().map_or(&[], |s| &s.pins);
@@ -282,7 +288,7 @@ impl Verlet {
         // 5. Stretch limit.
         if params.stretch_limit {
             if let (ConstraintOrder::Colored, Some(stencil)) = (self.order, &self.stencil) {
-                colored::limit_colored(stencil, mesh.pinned(), positions, MAX_STRETCH, pool);
+                colored::limit_colored(stencil, mesh.pinned(), positions, MAX_STRETCH, pool, simd);
             } else if let (true, Some(stencil)) = (parallel, &self.stencil) {
                 let bands = &self.bands;
                 self.stretch
@@ -301,10 +307,13 @@ impl Verlet {
         // last position is only ever kept. So this passes exactly when both arrays are finite,
         // for half the reads.
         let last_finite = match &self.stencil {
-            Some(stencil) => stencil.pins.iter().all(|&i| all_finite(&state.last[i..=i])),
-            None => all_finite(&state.last),
+            Some(stencil) => stencil
+                .pins
+                .iter()
+                .all(|&i| all_finite(simd, &state.last[i..=i])),
+            None => all_finite(simd, &state.last),
         };
-        if last_finite && finite_on(&state.positions, pool) {
+        if last_finite && finite_on(simd, &state.positions, pool) {
             return Ok(StepReport::default());
         }
         match state.first_non_finite() {
@@ -346,47 +355,38 @@ fn poll_until(done: &AtomicBool) {
 
 /// Whether every coordinate of `points` is finite, on `pool`'s threads for a big cloth, in
 /// tasks of the threaded passes' size.
-fn finite_on(points: &[Vec3], pool: Option<&rayon::ThreadPool>) -> bool {
+fn finite_on(simd: Simd, points: &[Vec3], pool: Option<&rayon::ThreadPool>) -> bool {
     match pool {
-        Some(pool) if points.len() > PARALLEL_CHUNK => {
-            pool.install(|| points.par_chunks(PARALLEL_CHUNK).all(all_finite))
-        }
-        _ => all_finite(points),
+        Some(pool) if points.len() > PARALLEL_CHUNK => pool.install(|| {
+            points
+                .par_chunks(PARALLEL_CHUNK)
+                .all(|chunk| all_finite(simd, chunk))
+        }),
+        _ => all_finite(simd, points),
     }
 }
 
 /// Whether every coordinate is finite.
-fn all_finite(points: &[Vec3]) -> bool {
+fn all_finite(simd: Simd, points: &[Vec3]) -> bool {
     // NOTE: over the coordinates as one flat run of f64s, not point by point, and on AVX2 where
     // the CPU has it: the loop is then a subtraction, a compare and an `and` per four values,
     // with no shuffles to gather each point's `x y z`.
-    const { assert!(size_of::<Vec3>() == 3 * size_of::<f64>()) };
-    // SAFETY: a `Vec3` is nalgebra's `repr(C)` matrix over a `repr(transparent)` array storage,
-    // `[[f64; 3]; 1]`: three contiguous f64s with no padding (size checked above), so `n` of
-    // them are `3 n` f64s, borrowed for as long as `points`.
-    #[allow(unsafe_code)]
-    let coordinates: &[f64] =
-        unsafe { std::slice::from_raw_parts(points.as_ptr().cast(), 3 * points.len()) };
+    let coordinates: &[f64] = bytemuck::cast_slice(points);
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2, checked just above.
+    if let Some(avx2) = simd.avx2() {
+        // SAFETY: the CPU runs AVX2: an `Avx2` exists.
         #[allow(unsafe_code)]
-        return unsafe { all_finite_avx2(coordinates) };
+        return unsafe { all_finite_avx2(avx2, coordinates) };
     }
     finite_run(coordinates)
 }
 
 /// [`finite_run`] compiled for AVX2.
-///
-/// # Safety
-/// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
 #[target_feature(enable = "avx2")]
-unsafe fn all_finite_avx2(values: &[f64]) -> bool {
+fn all_finite_avx2(_: Avx2, values: &[f64]) -> bool {
     finite_run(values)
 }
-
 /// Whether every value is finite, without early exit so it vectorises: `v - v` is 0 for a
 /// finite `v` and NaN for a NaN or an infinity.
 #[inline(always)]

@@ -4,6 +4,9 @@
 use cloth_mesh::Vec3;
 
 use super::SpatialHash;
+#[cfg(target_arch = "x86_64")]
+use crate::simd::Avx2;
+use crate::simd::Simd;
 
 /// One axis of a box key: `floor(v) + 2^20`, wrapped to 21 bits, for `v` the coordinate in
 /// box sizes.
@@ -38,13 +41,9 @@ pub(super) fn keys_portable(keys: &mut [u64], positions: &[Vec3], size: (f64, f6
 
 /// [`keys_portable`] compiled for AVX2: four points' divisions and bit operations at once, the
 /// same operations, so the same keys.
-///
-/// # Safety
-/// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
 #[target_feature(enable = "avx2")]
-unsafe fn keys_avx2(keys: &mut [u64], positions: &[Vec3], size: (f64, f64, f64)) {
+fn keys_avx2(_: Avx2, keys: &mut [u64], positions: &[Vec3], size: (f64, f64, f64)) {
     keys_portable(keys, positions, size);
 }
 
@@ -52,13 +51,18 @@ unsafe fn keys_avx2(keys: &mut [u64], positions: &[Vec3], size: (f64, f64, f64))
 ///
 /// NOTE: on the caller's thread even when the solver has threads: the pass is a few
 /// arithmetic operations a point, less than what handing it to a pool costs.
-pub(super) fn compute_keys(keys: &mut [u64], positions: &[Vec3], size: (f64, f64, f64)) {
+pub(super) fn compute_keys(
+    simd: Simd,
+    keys: &mut [u64],
+    positions: &[Vec3],
+    size: (f64, f64, f64),
+) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2, checked just above.
+    if let Some(avx2) = simd.avx2() {
+        // SAFETY: the CPU runs AVX2: an `Avx2` exists.
         #[allow(unsafe_code)]
         unsafe {
-            keys_avx2(keys, positions, size);
+            keys_avx2(avx2, keys, positions, size);
         }
         return;
     }

@@ -29,6 +29,8 @@ use std::arch::x86_64::{
 
 use cloth_mesh::Vec3;
 
+use crate::simd::Simd;
+
 /// The most points of a box taken on lanes: the pairs of one point fit a 64-bit mask.
 pub(super) const MAX_POINTS: usize = 64;
 
@@ -46,10 +48,10 @@ pub(super) struct BoxLanes {
 }
 
 impl BoxLanes {
-    /// Empty lanes, or `None` when the CPU lacks AVX2.
+    /// Empty lanes, or `None` when `simd` lacks AVX2.
     #[inline]
-    pub(super) fn new() -> Option<Self> {
-        std::arch::is_x86_feature_detected!("avx2").then_some(Self {
+    pub(super) fn new(simd: Simd) -> Option<Self> {
+        simd.avx2().map(|_| Self {
             c: [[f64::INFINITY; CAP]; 3],
             n: 0,
         })

@@ -10,6 +10,7 @@ use super::memory::Memory;
 use super::table::{Table, table_size};
 use super::{PARALLEL_CHUNK, SpatialHash};
 use crate::disjoint::Disjoint;
+use crate::simd::Simd;
 
 /// What a run of points keeps between the passes of a rebuild.
 #[derive(Debug, Default, Clone)]
@@ -51,6 +52,7 @@ struct CellPass<'a> {
     nw: usize,
     /// Whether the points' cells from the last rebuild are valid.
     coherent: bool,
+    simd: Simd,
 }
 
 impl CellPass<'_> {
@@ -66,7 +68,12 @@ impl CellPass<'_> {
         cell_of: &mut [u32],
         run: &mut Run,
     ) {
-        compute_keys(keys, &self.positions[first..first + keys.len()], self.size);
+        compute_keys(
+            self.simd,
+            keys,
+            &self.positions[first..first + keys.len()],
+            self.size,
+        );
         run.misses.clear();
         run.changed.clear();
         let nw = self.nw;
@@ -190,6 +197,7 @@ impl SpatialHash {
             size: Self::box_size(mesh),
             nw: mesh.nw(),
             coherent: self.coherent,
+            simd: self.simd,
         };
         let each = |(r, (((keys, last), cells), run)): (usize, RunWindows<'_>)| {
             pass.run(r * chunk, keys, last, cells, run);

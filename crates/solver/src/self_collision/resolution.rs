@@ -6,6 +6,7 @@ use cloth_mesh::{ClothMesh, Vec3};
 use super::memory::{ANCHOR_WAIT, FOLLOW2, MAX_STRIKES, Memory};
 use super::{PARALLEL_CHUNK, SpatialHash, dist2, lanes};
 use crate::disjoint::Disjoint;
+use crate::simd::Simd;
 
 impl SpatialHash {
     /// [`SpatialHash::resolve`] with its boxes shared out among `pool`'s threads when there is
@@ -42,6 +43,7 @@ impl SpatialHash {
             members: &self.members,
             positions,
             anchors: Disjoint::new(&mut self.anchor),
+            simd: self.simd,
             threaded: pool.is_some(),
         };
         let cuts = Cuts {
@@ -72,6 +74,8 @@ struct Boxes<'a> {
     positions: &'a [Vec3],
     /// The points' anchors; a box's task reads and writes those of its own points.
     anchors: Disjoint<'a, Vec3>,
+    /// The vector instructions the pair search may use.
+    simd: Simd,
     /// Whether to split the boxes between the current pool's threads.
     threaded: bool,
 }
@@ -98,7 +102,7 @@ impl Boxes<'_> {
         let start = self.start;
         let (lo, hi) = (start[cells.start] as usize, start[cells.end] as usize);
         if !self.threaded || hi - lo <= PARALLEL_CHUNK || cells.len() < 2 {
-            let mut scratch = lanes::BoxLanes::new();
+            let mut scratch = lanes::BoxLanes::new(self.simd);
             for (c, (touched, memory)) in cells.zip(touched.iter_mut().zip(memory)) {
                 let range = start[c] as usize..start[c + 1] as usize;
                 let window = range.start - offset..range.end - offset;

@@ -36,6 +36,7 @@
 use cloth_mesh::{ClothMesh, GridSpec, SpringKind, Vec3};
 
 use crate::SolveError;
+use crate::simd::{Avx2, Simd};
 
 #[cfg(target_arch = "x86_64")]
 mod fused;
@@ -50,45 +51,8 @@ pub(crate) const DIRECTIONS: [(isize, isize, SpringKind); 6] = [
     (0, -2, SpringKind::Bending),
 ];
 
-/// Which build of the fused pass (`sweep/fused.rs`) a sweep's rows take, if any.
-///
-/// NOTE: only [`Fused::detect`] (and, in tests, [`Fused::builds`]) make one other than
-/// [`Fused::OFF`], after checking that the CPU runs its instructions; the build is private to
-/// this module. So holding a `Fused` is the proof the `unsafe` calls of the pass rest on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Fused(Build);
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-enum Build {
-    Off,
-    /// The pass compiled for AVX2.
-    Avx2,
-}
-
-impl Fused {
-    /// No fused pass: every row takes the portable loops.
-    pub(crate) const OFF: Self = Self(Build::Off);
-
-    /// The fastest build this CPU runs (checked once, then a cached flag).
-    pub(crate) fn detect() -> Self {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            return Self(Build::Avx2);
-        }
-        Self::OFF
-    }
-
-    /// Every build this CPU runs, for tests that compare them.
-    #[cfg(all(test, target_arch = "x86_64"))]
-    pub(crate) fn builds() -> Vec<Self> {
-        let best = Self::detect();
-        match best.0 {
-            Build::Avx2 => vec![best],
-            Build::Off => vec![],
-        }
-    }
-}
+/// Whether a sweep's rows take the fused pass (`sweep/fused.rs`): its AVX2 proof when they do.
+pub(crate) type Fused = Option<Avx2>;
 
 /// Zero columns on each side of a row buffer, so a point can read the forces of springs emitted
 /// up to two columns away without bounds tests.
@@ -113,16 +77,12 @@ macro_rules! ring_strides {
         /// or 1.5 times one, plus `2 PAD` (so rows of a power of two points fit exactly).
         const RING_STRIDES: &[usize] = &[$($stride),+];
 
-        /// Runs `build`'s fused pass (a build other than [`Build::Off`]) compiled for the
-        /// scratch's stride, or the one with the stride a variable when it is not in
-        /// [`RING_STRIDES`].
-        ///
-        /// # Safety
-        /// The CPU must run `build` (see [`Fused`]).
+        /// Runs the fused pass compiled for the scratch's stride, or the one with the stride a
+        /// variable when it is not in [`RING_STRIDES`].
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code, clippy::too_many_arguments)]
-        unsafe fn fused_pass(
-            build: Build,
+        fn fused_pass(
+            _: Avx2,
             stencil: &Stencil,
             scratch: &mut RowScratch,
             params: &SweepParams,
@@ -131,17 +91,14 @@ macro_rules! ring_strides {
             ahead: &[Vec3],
             next: &mut [Vec3],
         ) -> usize {
-            // SAFETY (every call): the caller's contract.
+            // SAFETY: the pass is compiled for AVX2, which the CPU runs: an `Avx2` exists.
             unsafe {
-                match (build, scratch.stride) {
+                match scratch.stride {
                     $(
-                        (Build::Avx2, $stride) => stencil
+                        $stride => stencil
                             .emit_sum_integrate_avx2::<$stride>(scratch, params, y, positions, ahead, next),
                     )+
-                    (Build::Avx2, _) => {
-                        stencil.emit_sum_integrate_avx2::<0>(scratch, params, y, positions, ahead, next)
-                    }
-                    (Build::Off, _) => unreachable!("no fused pass is run without a build"),
+                    _ => stencil.emit_sum_integrate_avx2::<0>(scratch, params, y, positions, ahead, next),
                 }
             }
         }
@@ -280,11 +237,12 @@ impl Stencil {
     /// rows) and `last` (rows `r0..r1`, in `next`), and writes each new position into `next`
     /// (pinned points keep theirs).
     ///
-    /// Runs the AVX2 build of the sweep when the CPU has it (see [`Stencil::sweep_avx2`]), with
-    /// the best build of the fused pass it runs ([`Fused::detect`]).
+    /// Runs the AVX2 build of the sweep, with the fused pass, when `simd` has AVX2 (see
+    /// [`Stencil::sweep_avx2`]).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn sweep(
         &self,
+        simd: Simd,
         scratch: &mut RowScratch,
         params: &SweepParams,
         positions: &[Vec3],
@@ -293,17 +251,16 @@ impl Stencil {
         r0: usize,
         r1: usize,
     ) {
-        let fused = Fused::detect();
         #[cfg(target_arch = "x86_64")]
-        if fused != Fused::OFF {
-            // SAFETY: a fused build is only detected on a CPU with AVX2 (see `Fused`).
+        if let Some(avx2) = simd.avx2() {
+            // SAFETY: the CPU runs AVX2: an `Avx2` exists.
             #[allow(unsafe_code)]
             unsafe {
-                self.sweep_avx2(fused, scratch, params, positions, pinned, next, r0, r1);
+                self.sweep_avx2(avx2, scratch, params, positions, pinned, next, r0, r1);
             }
             return;
         }
-        self.sweep_rows(fused, scratch, params, positions, pinned, next, r0, r1);
+        self.sweep_rows(None, scratch, params, positions, pinned, next, r0, r1);
     }
 
     /// The sweep compiled for AVX2: four f64 lanes per instruction instead of baseline
@@ -313,15 +270,12 @@ impl Stencil {
     /// multiply-add rounds once where the course rounds twice), and Rust never contracts or
     /// reassociates float operations, so every lane does the same IEEE operations in the same
     /// order as the portable build: the results are bit-identical (tested below).
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
-    #[allow(unsafe_code, clippy::too_many_arguments)]
+    #[allow(clippy::too_many_arguments)]
     #[target_feature(enable = "avx2")]
-    unsafe fn sweep_avx2(
+    fn sweep_avx2(
         &self,
-        fused: Fused,
+        avx2: Avx2,
         scratch: &mut RowScratch,
         params: &SweepParams,
         positions: &[Vec3],
@@ -330,12 +284,12 @@ impl Stencil {
         r0: usize,
         r1: usize,
     ) {
-        self.sweep_rows(fused, scratch, params, positions, pinned, next, r0, r1);
+        self.sweep_rows(Some(avx2), scratch, params, positions, pinned, next, r0, r1);
     }
 
     /// The sweep itself, for whatever instruction set the caller was compiled for: everything
     /// it calls is inlined into it, so [`Stencil::sweep_avx2`] vectorises all of it. With
-    /// [`Fused::OFF`] it is the portable sweep; otherwise the rows that can take it emit their
+    /// no fused pass it is the portable sweep; otherwise the rows that can take it emit their
     /// springs, and sum and integrate two rows behind, in one pass of the given build
     /// (`fused`).
     #[allow(clippy::too_many_arguments)]
@@ -373,7 +327,7 @@ impl Stencil {
         for y in r0..(r1 + 2) {
             // Rows before `r0 + 2` have no row of this band to sum; past the last row there is
             // nothing to emit.
-            let fuse = fused != Fused::OFF && y >= r0 + 2 && self.fusable(params, y);
+            let fuse = fused.is_some() && y >= r0 + 2 && self.fusable(params, y);
             if y < nh {
                 if !loaded {
                     self.load_row(scratch, positions, y);
@@ -393,20 +347,16 @@ impl Stencil {
                 };
                 loaded = fuse && !ahead.is_empty();
                 let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
-                // Columns already integrated by the fused pass (`fuse` is never set off
-                // x86-64, see `Fused`).
-                let done = if fuse {
+                // Columns already integrated by the fused pass.
+                let done = match fused {
                     #[cfg(target_arch = "x86_64")]
-                    // SAFETY: a `Fused` of a build is only made on CPUs that run it.
-                    #[allow(unsafe_code)]
-                    unsafe {
-                        fused_pass(fused.0, self, scratch, params, y, positions, ahead, row)
+                    Some(avx2) if fuse => {
+                        fused_pass(avx2, self, scratch, params, y, positions, ahead, row)
                     }
-                    #[cfg(not(target_arch = "x86_64"))]
-                    unreachable!("`fuse` is never set off x86-64")
-                } else {
-                    self.sum_row(scratch, params, r);
-                    0
+                    _ => {
+                        self.sum_row(scratch, params, r);
+                        0
+                    }
                 };
                 let total = &scratch.total;
                 integrate_row(total, stride, params, positions, pinned, row, done);
@@ -644,7 +594,7 @@ mod tests {
         let pinned = mesh.pinned();
         let mut portable = last[band.clone()].to_vec();
         stencil.sweep_rows(
-            Fused::OFF,
+            None,
             &mut RowScratch::default(),
             &params,
             &positions,
@@ -656,6 +606,7 @@ mod tests {
         assert_ne!(portable, last[band.clone()], "the sweep moved the points");
         let mut dispatched = last[band.clone()].to_vec();
         stencil.sweep(
+            Simd::detect(),
             &mut RowScratch::default(),
             &params,
             &positions,
@@ -665,26 +616,6 @@ mod tests {
             rows.end,
         );
         assert_same_bits(&dispatched, &portable);
-        // Every build of the fused pass this CPU runs, not only the one dispatched.
-        #[cfg(target_arch = "x86_64")]
-        for fused in Fused::builds() {
-            let mut built = last[band.clone()].to_vec();
-            // SAFETY: `builds` lists only builds this CPU runs, all on AVX2 CPUs.
-            #[allow(unsafe_code)]
-            unsafe {
-                stencil.sweep_avx2(
-                    fused,
-                    &mut RowScratch::default(),
-                    &params,
-                    &positions,
-                    pinned,
-                    &mut built,
-                    rows.start,
-                    rows.end,
-                );
-            }
-            assert_same_bits(&built, &portable);
-        }
     }
 
     #[test]
@@ -751,6 +682,7 @@ mod tests {
             let run = |scratch: &mut RowScratch| {
                 let mut next = mesh.start_positions().to_vec();
                 stencil.sweep(
+                    Simd::detect(),
                     scratch,
                     &params(bending),
                     &positions,
