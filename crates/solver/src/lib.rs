@@ -4,7 +4,8 @@
 //! scratch memory and caches (rapier's "temporary working memory" rule), never the simulation
 //! state, so the caller may swap solvers between any two steps and the cloth keeps its motion.
 //!
-//! [`Verlet`] is the reference: the course's explicit damped position Verlet, step for step.
+//! [`Verlet`] is the course's explicit damped position Verlet, held bit for bit to
+//! [`reference_step`], the course's step written plainly.
 //! Anyone can write another solver crate against this trait; `cloth-implicit` is one. A solver
 //! is offered to users by name through a [`SolverEntry`] (name, description, steps per frame,
 //! options, constructor) in a [`Registry`] that the binary assembles ([`Verlet::ENTRY`] is

@@ -17,18 +17,17 @@
 //! see [`StepParams::explicit_ks_limit`]). Damping acts as a drag of `(d/100)/dt` per second, so
 //! changing the steps per frame changes the effective drag, as it does in the course.
 //!
-//! # Speed
+//! # Fast paths and their invariant
 //!
-//! Steps 1 and 2 run as one sweep over the grid's rows on struct-of-arrays row buffers (`sweep`),
-//! bit-identical to the course's spring loop, compiled for AVX2 when the CPU has it (with each
-//! row's springs, and the sums and the Verlet update two rows behind, in one loop, so that work
-//! runs in the divider's shadow) and shared between threads by rows. Self-collision groups points
-//! with a linear counting sort and skips boxes with no pair within reach; the stretch limit checks
-//! only the springs a vectorised pre-pass could not prove inside the limit, or with an end already
-//! moved (`limit`). With [`ConstraintOrder::Faithful`] (the default) steps 3 and 5 keep the
-//! course's sequential order and results; [`ConstraintOrder::Parallel`] trades that order for
-//! threads, and [`ConstraintOrder::Colored`] for classes of independent springs, on SIMD lanes
-//! and threads (`colored`).
+//! Steps 1 and 2 run as one sweep over the grid's rows (`sweep`), self-collision through a
+//! [`SpatialHash`] that skips boxes provably clear, and the stretch limit checks only the springs
+//! a pre-pass could not prove inside the limit (`limit`). With [`ConstraintOrder::Faithful`] (the
+//! default) every one of them makes the course's operations in the course's order, so the
+//! results are those of [`reference_step`](crate::reference_step) bit for bit, on any thread
+//! count and with or without AVX2 (the solver's tests hold them to it).
+//! [`ConstraintOrder::Parallel`] and [`ConstraintOrder::Colored`] change only the order of the
+//! stretch limit's corrections (`colored`). How the speed is obtained, and what it is, is in
+//! `docs/performance.md`.
 
 mod colored;
 mod limit;
