@@ -8,8 +8,7 @@
 //! - `table`: box keys to cell numbers;
 //! - `layout`: the points grouped box by box, in index order, kept or moved between rebuilds;
 //! - `memory`: what is remembered of a box, so a box provably still clear is skipped;
-//! - `resolution`: the corrections, box by box, on threads when the solver has them;
-//! - `lanes`: a box's pair search on AVX2 lanes.
+//! - `resolution`: the corrections, box by box, on threads when the solver has them.
 
 use cloth_mesh::{ClothMesh, Vec3};
 
@@ -24,39 +23,6 @@ use memory::Memory;
 use table::Table;
 
 use crate::simd::Simd;
-
-#[cfg(target_arch = "x86_64")]
-mod lanes;
-
-/// Off x86-64 there are no lanes: an uninhabited stand-in with their interface, so the pair
-/// search (`Pairs`) reads the same on every target and never holds one.
-#[cfg(not(target_arch = "x86_64"))]
-mod lanes {
-    use cloth_mesh::Vec3;
-
-    /// No bound: no lanes are ever made here.
-    pub(super) const MAX_POINTS: usize = usize::MAX;
-
-    pub(super) enum BoxLanes {}
-
-    impl BoxLanes {
-        pub(super) fn new(_: crate::simd::Simd) -> Option<Self> {
-            None
-        }
-        pub(super) fn load(&mut self, _: &[Vec3]) {
-            match *self {}
-        }
-        pub(super) fn set(&mut self, _: usize, _: &Vec3) {
-            match *self {}
-        }
-        pub(super) fn closest_pair_out_of_reach(&self, _: f64) -> Option<f64> {
-            match *self {}
-        }
-        pub(super) fn within_reach(&self, _: usize, _: f64) -> u64 {
-            match *self {}
-        }
-    }
-}
 
 /// A spatial hash of the cloth's points in boxes of `3 * width / nw` by `3 * height / nh` by the
 /// larger of the two, exactly the course's boxes, so the same pairs of points interact.
@@ -189,7 +155,6 @@ impl SpatialHash {
 #[cfg(test)]
 mod tests {
     use super::keys::{box_bits, compute_keys, keys_portable};
-    use super::resolution::{LANES_FROM, Pairs, Repulsion};
     use super::*;
     use crate::testing::assert_same_bits;
     use cloth_mesh::GridSpec;
@@ -365,67 +330,6 @@ mod tests {
         let moved = course.iter().zip(&start).filter(|(a, b)| a != b).count();
         assert!(moved > mesh.len() / 2, "the test must exercise corrections");
         assert_same_bits(&fast, &course);
-    }
-
-    #[test]
-    fn lanes_find_the_pairs_and_make_the_corrections_of_the_scalar_loops() {
-        let mut scratch = lanes::BoxLanes::new(crate::simd::Simd::detect());
-        if scratch.is_none() {
-            return; // No AVX2 (or not x86-64): no lanes to compare.
-        }
-        let reach = 0.019;
-        let repulsion = Repulsion {
-            reach,
-            reach2_out: reach * reach * (1.0 + 4.0 * f64::EPSILON),
-            steps: 30.0,
-        };
-        let (mut clear, mut crowded, mut corrected) = (0, 0, 0);
-        for n in LANES_FROM..=lanes::MAX_POINTS {
-            for seed in 0..4 {
-                // Boxes from sparse (every pair out of reach, so a closest distance) to dense
-                // (corrections chaining through points corrected before them); a NaN point, an
-                // infinite one and two coincident points (no direction: skipped) among them.
-                let side = reach * [40.0, 4.0, 2.0, 1.0][seed as usize];
-                let mut slots = scattered(n, seed * 100 + n as u64, 0.0, side);
-                match seed {
-                    1 => slots[n / 2].y = f64::NAN,
-                    2 => slots[n - 1] = Vec3::new(f64::INFINITY, 0.0, 0.0),
-                    3 => slots[3] = slots[1],
-                    _ => {}
-                }
-                let mut pairs = Pairs::new(&slots, &mut scratch);
-                assert!(matches!(pairs, Pairs::Lanes(_)));
-                let closest = pairs.closest_pair_out_of_reach(&repulsion, &slots);
-                assert_eq!(
-                    closest.map(f64::to_bits),
-                    repulsion
-                        .closest_pair_out_of_reach(&slots)
-                        .map(f64::to_bits),
-                    "{n} points, seed {seed}"
-                );
-                if closest.is_some() {
-                    clear += 1;
-                    continue;
-                }
-                crowded += 1;
-                let (mut on_lanes, mut scalar) = (slots.clone(), slots.clone());
-                for me in 0..n {
-                    if let Some(p) = pairs.corrected(&repulsion, &on_lanes, me) {
-                        on_lanes[me] = p;
-                        pairs.moved(me, &p);
-                        corrected += 1;
-                    }
-                    if let Some(p) = Pairs::Scalar.corrected(&repulsion, &scalar, me) {
-                        scalar[me] = p;
-                    }
-                }
-                assert_same_bits(&on_lanes, &scalar);
-            }
-        }
-        assert!(
-            clear > 0 && crowded > 0 && corrected > 1000,
-            "{clear} {crowded} {corrected}"
-        );
     }
 
     /// `positions` resolved by a fresh hash, which has no memory and so looks into every box,

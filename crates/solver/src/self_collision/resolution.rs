@@ -4,9 +4,8 @@
 use cloth_mesh::{ClothMesh, Vec3};
 
 use super::memory::{ANCHOR_WAIT, FOLLOW2, MAX_STRIKES, Memory};
-use super::{PARALLEL_CHUNK, SpatialHash, dist2, lanes};
+use super::{PARALLEL_CHUNK, SpatialHash, dist2};
 use crate::disjoint::Disjoint;
-use crate::simd::Simd;
 
 impl SpatialHash {
     /// [`SpatialHash::resolve`] with its boxes shared out among `pool`'s threads when there is
@@ -43,7 +42,6 @@ impl SpatialHash {
             members: &self.members,
             positions,
             anchors: Disjoint::new(&mut self.anchor),
-            simd: self.simd,
             threaded: pool.is_some(),
         };
         let cuts = Cuts {
@@ -74,8 +72,6 @@ struct Boxes<'a> {
     positions: &'a [Vec3],
     /// The points' anchors; a box's task reads and writes those of its own points.
     anchors: Disjoint<'a, Vec3>,
-    /// The vector instructions the pair search may use.
-    simd: Simd,
     /// Whether to split the boxes between the current pool's threads.
     threaded: bool,
 }
@@ -102,12 +98,11 @@ impl Boxes<'_> {
         let start = self.start;
         let (lo, hi) = (start[cells.start] as usize, start[cells.end] as usize);
         if !self.threaded || hi - lo <= PARALLEL_CHUNK || cells.len() < 2 {
-            let mut scratch = lanes::BoxLanes::new(self.simd);
             for (c, (touched, memory)) in cells.zip(touched.iter_mut().zip(memory)) {
                 let range = start[c] as usize..start[c + 1] as usize;
                 let window = range.start - offset..range.end - offset;
                 let (members, slots) = (&self.members[range], &mut sorted[window]);
-                *touched = self.resolve_box(members, slots, memory, &mut scratch);
+                *touched = self.resolve_box(members, slots, memory);
             }
             return;
         }
@@ -137,16 +132,9 @@ impl Boxes<'_> {
     }
 
     /// Resolves one box: `members` are its points' indices in index order, `slots` its run of
-    /// `sorted`, `memory` what is known of it (updated), `scratch` the task's lanes. True when
-    /// it moved a point.
+    /// `sorted`, `memory` what is known of it (updated). True when it moved a point.
     #[inline]
-    fn resolve_box(
-        &self,
-        members: &[u32],
-        slots: &mut [Vec3],
-        memory: &mut Memory,
-        scratch: &mut LaneScratch,
-    ) -> bool {
+    fn resolve_box(&self, members: &[u32], slots: &mut [Vec3], memory: &mut Memory) -> bool {
         // A lone point has no pair.
         if members.len() < 2 {
             return false;
@@ -186,8 +174,7 @@ impl Boxes<'_> {
         for (slot, &i) in slots.iter_mut().zip(members) {
             *slot = self.positions[i as usize];
         }
-        let mut pairs = Pairs::new(slots, scratch);
-        if let Some(closest2) = pairs.closest_pair_out_of_reach(self.repulsion, slots) {
+        if let Some(closest2) = self.repulsion.closest_pair_out_of_reach(slots) {
             if memory.wait > 0 {
                 memory.wait -= 1;
                 return false;
@@ -210,90 +197,14 @@ impl Boxes<'_> {
             if self.pinned[i as usize] {
                 continue;
             }
-            if let Some(p) = pairs.corrected(self.repulsion, slots, k) {
+            let others = (0..slots.len()).filter(|&j| j != k);
+            if let Some(p) = self.repulsion.corrected(slots, k, others) {
                 // NOTE: later points of the box see this correction, as in the course.
                 slots[k] = p;
-                pairs.moved(k, &p);
                 any = true;
             }
         }
         any
-    }
-}
-
-/// How a box's pairs are searched: on AVX2 lanes (`lanes`) when the CPU has AVX2 and the box
-/// is neither too small to pay for loading them nor too big for them, else by the scalar
-/// loops. Both find the same pairs (see `lanes`).
-pub(super) enum Pairs<'a> {
-    Scalar,
-    Lanes(&'a mut lanes::BoxLanes),
-}
-
-/// The fewest points of a box searched on lanes: below, loading the lanes costs more than the
-/// scalar loops save, above all in a box with a pair within reach, which the scalar search
-/// leaves at that pair.
-pub(super) const LANES_FROM: usize = 16;
-
-/// The lanes a task loads boxes into, when the CPU has them.
-type LaneScratch = Option<lanes::BoxLanes>;
-
-impl<'a> Pairs<'a> {
-    /// The search for the box at `slots`, loaded into `scratch` when lanes take it.
-    #[inline]
-    pub(super) fn new(slots: &[Vec3], scratch: &'a mut LaneScratch) -> Self {
-        if (LANES_FROM..=lanes::MAX_POINTS).contains(&slots.len())
-            && let Some(lanes) = scratch
-        {
-            lanes.load(slots);
-            return Self::Lanes(lanes);
-        }
-        Self::Scalar
-    }
-
-    /// [`Repulsion::closest_pair_out_of_reach`] of the box at `slots`.
-    #[inline]
-    pub(super) fn closest_pair_out_of_reach(
-        &self,
-        repulsion: &Repulsion,
-        slots: &[Vec3],
-    ) -> Option<f64> {
-        match self {
-            Self::Scalar => repulsion.closest_pair_out_of_reach(slots),
-            Self::Lanes(lanes) => lanes.closest_pair_out_of_reach(repulsion.reach2_out),
-        }
-    }
-
-    /// [`Repulsion::corrected`] position of point `me` of the box at `slots`.
-    #[inline]
-    pub(super) fn corrected(
-        &self,
-        repulsion: &Repulsion,
-        slots: &[Vec3],
-        me: usize,
-    ) -> Option<Vec3> {
-        match self {
-            Self::Scalar => repulsion.corrected(slots, me, (0..slots.len()).filter(|&k| k != me)),
-            Self::Lanes(lanes) => {
-                let mut within = lanes.within_reach(me, repulsion.reach2_out);
-                let found = std::iter::from_fn(|| {
-                    (within != 0).then(|| {
-                        let k = within.trailing_zeros() as usize;
-                        within &= within - 1;
-                        k
-                    })
-                });
-                repulsion.corrected(slots, me, found)
-            }
-        }
-    }
-
-    /// Point `k` of the box moved to `p`.
-    #[inline]
-    pub(super) fn moved(&mut self, k: usize, p: &Vec3) {
-        match self {
-            Self::Scalar => {}
-            Self::Lanes(lanes) => lanes.set(k, p),
-        }
     }
 }
 
