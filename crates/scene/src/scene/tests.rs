@@ -43,7 +43,10 @@ fn thickness_is_read_as_the_courses_32_bit_float() {
     // The course's loader stores the thickness in a `float`: the standard scenes' 0.0095 m is
     // 0.00949999969... m there, and self-collision's reach is twice that.
     let p4 = load("pinned4", &[]).unwrap();
-    assert_eq!(p4.mesh.thickness().to_bits(), f64::from(0.0095_f32).to_bits());
+    assert_eq!(
+        p4.mesh.thickness().to_bits(),
+        f64::from(0.0095_f32).to_bits()
+    );
     assert_ne!(p4.mesh.thickness(), 0.0095);
 }
 
