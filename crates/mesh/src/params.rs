@@ -31,7 +31,7 @@ pub struct StepParams {
     /// Whether bending springs exert forces (default true).
     pub bending: bool,
     /// Simulation steps per frame (default 30). With `frames_per_sec` it sets the step
-    /// `dt = 1 / (frames_per_sec * steps_per_frame)`; self-collision divides its correction by it.
+    /// `dt = 1 / frames_per_sec / steps_per_frame`; self-collision divides its correction by it.
     pub steps_per_frame: u32,
     /// Frames per second of simulated time (default 90).
     pub frames_per_sec: f64,
@@ -78,10 +78,11 @@ pub const REFERENCE_STEPS_PER_FRAME: u32 = 30;
 pub const MAX_STRETCH: f64 = 1.1;
 
 impl StepParams {
-    /// The time step, seconds: `1 / (frames_per_sec * steps_per_frame)` (1/2700 by default).
+    /// The time step, seconds: `1 / frames_per_sec / steps_per_frame`, the course's operations
+    /// in the course's order (about 1/2700 s by default).
     #[must_use]
     pub fn dt(&self) -> f64 {
-        1.0 / (self.frames_per_sec * f64::from(self.steps_per_frame))
+        1.0 / self.frames_per_sec / f64::from(self.steps_per_frame)
     }
 
     /// Whether springs of `kind` exert forces.

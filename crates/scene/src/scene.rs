@@ -459,7 +459,9 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         height: c.height,
         num_width_points: nw,
         num_height_points: nh,
-        thickness: c.thickness,
+        // NOTE: the course's loader reads the thickness into a 32-bit float (0.0095 becomes
+        // 0.00949999969), and self-collision's reach is twice that value.
+        thickness: f64::from(c.thickness as f32),
         orientation,
         pinned,
         seed: seed.unwrap_or(GridSpec::default().seed),

@@ -1,6 +1,6 @@
 //! Times frames of the Verlet solver on one configuration, for profiling
 //! (`perf stat`, `perf record`): `cargo run --release -p cloth-solver --example frames --
-//! <grid points per side> <self-collision on|off> <frames> [threads] [faithful|parallel]`.
+//! <grid points per side> <self-collision on|off> <frames> [threads] [faithful|parallel|colored] [warm-up frames]`.
 
 use cloth_bench::{BenchRun, pinned_grid, time_frames};
 use cloth_mesh::ClothState;
@@ -13,11 +13,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let self_collision = arg(1, "on") == "on";
     let frames: u32 = arg(2, "300").parse()?;
     let threads: usize = arg(3, "1").parse()?;
-    let order = if arg(4, "faithful") == "parallel" {
-        ConstraintOrder::Parallel
-    } else {
-        ConstraintOrder::Faithful
+    let order = match arg(4, "faithful").as_str() {
+        "faithful" => ConstraintOrder::Faithful,
+        "parallel" => ConstraintOrder::Parallel,
+        "colored" => ConstraintOrder::Colored,
+        other => {
+            return Err(format!("unknown order {other:?}: faithful, parallel or colored").into());
+        }
     };
+    let warmup_frames: u32 = arg(5, "90").parse()?;
     let mesh = pinned_grid(n)?;
     let params = StepParams {
         self_collision,
@@ -32,7 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &params,
         &mut state,
         BenchRun {
-            warmup_frames: 90,
+            warmup_frames,
             frames,
         },
     )?;

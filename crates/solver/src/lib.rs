@@ -4,7 +4,8 @@
 //! scratch memory and caches (rapier's "temporary working memory" rule), never the simulation
 //! state, so the caller may swap solvers between any two steps and the cloth keeps its motion.
 //!
-//! [`Verlet`] is the reference: the course's explicit damped position Verlet, step for step.
+//! [`Verlet`] is the course's explicit damped position Verlet, held bit for bit to
+//! [`reference_step`], the course's step written plainly.
 //! Anyone can write another solver crate against this trait; `cloth-implicit` is one. A solver
 //! is offered to users by name through a [`SolverEntry`] (name, description, steps per frame,
 //! options, constructor) in a [`Registry`] that the binary assembles ([`Verlet::ENTRY`] is
@@ -15,8 +16,10 @@
 mod diagnostics;
 mod disjoint;
 mod error;
+mod reference;
 mod registry;
 mod self_collision;
+mod simd;
 mod stretch;
 mod verlet;
 mod verlet_entry;
@@ -42,6 +45,7 @@ pub use cloth_mesh::{
 };
 pub use diagnostics::{kinetic_energy, max_stretch_ratio};
 pub use error::SolveError;
+pub use reference::reference_step;
 pub use registry::{
     BuildSolver, OptionError, OptionKind, Registry, SolverEntry, SolverOption, UnknownSolver,
 };

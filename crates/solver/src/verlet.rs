@@ -2,7 +2,7 @@
 //!
 //! # Method
 //!
-//! One step of `dt = 1 / (fps * steps_per_frame)` seconds, in the course's order:
+//! One step of `dt = 1 / fps / steps_per_frame` seconds, in the course's order:
 //!
 //! 1. `F_i = m g + sum_springs k (|x_a - x_b| - L) u`, `k = ks` (structural, shearing) or
 //!    `0.2 ks` (bending), disabled types skipped;
@@ -17,18 +17,17 @@
 //! see [`StepParams::explicit_ks_limit`]). Damping acts as a drag of `(d/100)/dt` per second, so
 //! changing the steps per frame changes the effective drag, as it does in the course.
 //!
-//! # Speed
+//! # Fast paths and their invariant
 //!
-//! Steps 1 and 2 run as one sweep over the grid's rows on struct-of-arrays row buffers (`sweep`),
-//! bit-identical to the course's spring loop, compiled for AVX2 when the CPU has it (with each
-//! row's springs, and the sums and the Verlet update two rows behind, in one loop, so that work
-//! runs in the divider's shadow) and shared between threads by rows. Self-collision groups points
-//! with a linear counting sort and skips boxes with no pair within reach; the stretch limit checks
-//! only the springs a vectorised pre-pass could not prove inside the limit, or with an end already
-//! moved (`limit`). With [`ConstraintOrder::Faithful`] (the default) steps 3 and 5 keep the
-//! course's sequential order and results; [`ConstraintOrder::Parallel`] trades that order for
-//! threads, and [`ConstraintOrder::Colored`] for classes of independent springs, on SIMD lanes
-//! and threads (`colored`).
+//! Steps 1 and 2 run as one sweep over the grid's rows (`sweep`), self-collision through a
+//! [`SpatialHash`] that skips boxes provably clear, and the stretch limit checks only the springs
+//! a pre-pass could not prove inside the limit (`limit`). With [`ConstraintOrder::Faithful`] (the
+//! default) every one of them makes the course's operations in the course's order, so the
+//! results are those of [`reference_step`](crate::reference_step) bit for bit, on any thread
+//! count and with or without AVX2 (the solver's tests hold them to it).
+//! [`ConstraintOrder::Parallel`] and [`ConstraintOrder::Colored`] change only the order of the
+//! stretch limit's corrections (`colored`). How the speed is obtained, and what it is, is in
+//! `docs/performance.md`.
 
 mod colored;
 mod limit;
@@ -42,6 +41,7 @@ use rayon::prelude::*;
 
 use crate::params::MAX_STRETCH;
 use crate::self_collision::PARALLEL_CHUNK;
+use crate::simd::{Avx2, Simd};
 use crate::stretch::StretchBands;
 use crate::{
     Collider, SolveError, Solver, SpatialHash, StepParams, StepReport, apply_colliders,
@@ -79,6 +79,8 @@ pub enum ConstraintOrder {
 /// The faithful explicit Verlet solver. Owns only scratch memory and caches.
 #[derive(Debug, Default, Clone)]
 pub struct Verlet {
+    /// The vector instructions the CPU runs, detected when the solver is built.
+    simd: Simd,
     /// Worker threads (`None`: run on the caller's thread).
     pool: Option<Arc<rayon::ThreadPool>>,
     order: ConstraintOrder,
@@ -155,12 +157,14 @@ impl Verlet {
             return;
         };
         let (nw, nh) = (stencil.nw(), stencil.nh());
+        let simd = self.simd;
         let positions = &state.positions;
         let pinned = mesh.pinned();
         match &self.pool {
             None => {
                 self.scratch.resize_with(1, RowScratch::default);
                 stencil.sweep(
+                    simd,
                     &mut self.scratch[0],
                     params,
                     positions,
@@ -172,9 +176,8 @@ impl Verlet {
             }
             Some(pool) => {
                 // Two bands per thread: one thread can take a band of a slower one (the threads
-                // are shared with the rest of the machine), while each band's first two rows,
-                // emitted again by the band after, stay few (measured: 0.98 x the two-thread
-                // 256 x 256 frame of four bands per thread, in five pairs of runs).
+                // may share their cores with other processes), while each band's first two
+                // rows, emitted again by the band after, stay few.
                 let bands = (2 * pool.current_num_threads()).min(nh);
                 let rows = nh.div_ceil(bands);
                 self.scratch
@@ -189,7 +192,7 @@ impl Verlet {
                         .for_each(|(band, (next, scratch))| {
                             let r0 = band * rows;
                             let r1 = (r0 + rows).min(nh);
-                            stencil.sweep(scratch, params, positions, pinned, next, r0, r1);
+                            stencil.sweep(simd, scratch, params, positions, pinned, next, r0, r1);
                         });
                 });
             }
@@ -214,10 +217,9 @@ impl Solver for Verlet {
         };
         // NOTE: the whole step runs on one of the pool's threads, and the others spend it
         // polling for its work instead of going to sleep between its threaded passes: a pass
-        // then starts on every thread at once. A sleeping worker took a futex call to wake and
-        // tens of microseconds to run, several times a step (on two threads the kernel had 7 %
-        // of the samples; with the pollers a 256 x 256 step on two threads takes 0.92 x the
-        // time). The pollers are `join` jobs, on the stack: they allocate nothing.
+        // then starts on every thread at once. A sleeping worker takes a futex call to wake and
+        // tens of microseconds to run, several times a step. The pollers are `join` jobs, on
+        // the stack: they allocate nothing.
         let pollers = pool.current_num_threads() - 1;
         let done = AtomicBool::new(false);
         let mut step = || {
@@ -240,6 +242,7 @@ impl Verlet {
     ) -> Result<StepReport, SolveError> {
         params.validate()?;
         let mass = mesh.point_mass(params.density);
+        let simd = self.simd;
         let dt = params.dt();
         let sweep = SweepParams {
             k: sweep::DIRECTIONS.map(|(_, _, kind)| params.stiffness(kind)),
@@ -255,7 +258,7 @@ impl Verlet {
             self.stencil = Some(Stencil::new(mesh)?);
             self.bands = StretchBands::new(mesh);
             if let Some(stencil) = &self.stencil {
-                self.stretch = StretchSweep::new(stencil, MAX_STRETCH);
+                self.stretch = StretchSweep::new(stencil, MAX_STRETCH, simd);
             }
         }
         let pins: &[usize] = self.stencil.as_ref().map_or(&[], |s| &s.pins);
@@ -284,7 +287,7 @@ impl Verlet {
         // 5. Stretch limit.
         if params.stretch_limit {
             if let (ConstraintOrder::Colored, Some(stencil)) = (self.order, &self.stencil) {
-                colored::limit_colored(stencil, mesh.pinned(), positions, MAX_STRETCH, pool);
+                colored::limit_colored(stencil, mesh.pinned(), positions, MAX_STRETCH, pool, simd);
             } else if let (true, Some(stencil)) = (parallel, &self.stencil) {
                 let bands = &self.bands;
                 self.stretch
@@ -301,12 +304,15 @@ impl Verlet {
         // is not finite then, whatever `keep`), and no later pass makes a non-finite position
         // finite (collisions and corrections add to it or compute from it); a pinned point's
         // last position is only ever kept. So this passes exactly when both arrays are finite,
-        // for half the reads (both arrays were 4 % of a `pinned4` step).
+        // for half the reads.
         let last_finite = match &self.stencil {
-            Some(stencil) => stencil.pins.iter().all(|&i| all_finite(&state.last[i..=i])),
-            None => all_finite(&state.last),
+            Some(stencil) => stencil
+                .pins
+                .iter()
+                .all(|&i| all_finite(simd, &state.last[i..=i])),
+            None => all_finite(simd, &state.last),
         };
-        if last_finite && finite_on(&state.positions, pool) {
+        if last_finite && finite_on(simd, &state.positions, pool) {
             return Ok(StepReport::default());
         }
         match state.first_non_finite() {
@@ -346,51 +352,40 @@ fn poll_until(done: &AtomicBool) {
     }
 }
 
-/// Whether every coordinate of `points` is finite, on `pool`'s threads for a big cloth (a
-/// 256 x 256 cloth's positions and last positions took 3 % of a step on one thread), in tasks
-/// of the threaded passes' size.
-fn finite_on(points: &[Vec3], pool: Option<&rayon::ThreadPool>) -> bool {
+/// Whether every coordinate of `points` is finite, on `pool`'s threads for a big cloth, in
+/// tasks of the threaded passes' size.
+fn finite_on(simd: Simd, points: &[Vec3], pool: Option<&rayon::ThreadPool>) -> bool {
     match pool {
-        Some(pool) if points.len() > PARALLEL_CHUNK => {
-            pool.install(|| points.par_chunks(PARALLEL_CHUNK).all(all_finite))
-        }
-        _ => all_finite(points),
+        Some(pool) if points.len() > PARALLEL_CHUNK => pool.install(|| {
+            points
+                .par_chunks(PARALLEL_CHUNK)
+                .all(|chunk| all_finite(simd, chunk))
+        }),
+        _ => all_finite(simd, points),
     }
 }
 
 /// Whether every coordinate is finite.
-fn all_finite(points: &[Vec3]) -> bool {
+fn all_finite(simd: Simd, points: &[Vec3]) -> bool {
     // NOTE: over the coordinates as one flat run of f64s, not point by point, and on AVX2 where
     // the CPU has it: the loop is then a subtraction, a compare and an `and` per four values,
-    // with no shuffles to gather each point's `x y z` (point by point on SSE2 the check was 5 %
-    // of a `pinned4` step).
-    const { assert!(size_of::<Vec3>() == 3 * size_of::<f64>()) };
-    // SAFETY: a `Vec3` is nalgebra's `repr(C)` matrix over a `repr(transparent)` array storage,
-    // `[[f64; 3]; 1]`: three contiguous f64s with no padding (size checked above), so `n` of
-    // them are `3 n` f64s, borrowed for as long as `points`.
-    #[allow(unsafe_code)]
-    let coordinates: &[f64] =
-        unsafe { std::slice::from_raw_parts(points.as_ptr().cast(), 3 * points.len()) };
+    // with no shuffles to gather each point's `x y z`.
+    let coordinates: &[f64] = bytemuck::cast_slice(points);
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2, checked just above.
+    if let Some(avx2) = simd.avx2() {
+        // SAFETY: the CPU runs AVX2: an `Avx2` exists.
         #[allow(unsafe_code)]
-        return unsafe { all_finite_avx2(coordinates) };
+        return unsafe { all_finite_avx2(avx2, coordinates) };
     }
     finite_run(coordinates)
 }
 
 /// [`finite_run`] compiled for AVX2.
-///
-/// # Safety
-/// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
 #[target_feature(enable = "avx2")]
-unsafe fn all_finite_avx2(values: &[f64]) -> bool {
+fn all_finite_avx2(_: Avx2, values: &[f64]) -> bool {
     finite_run(values)
 }
-
 /// Whether every value is finite, without early exit so it vectorises: `v - v` is 0 for a
 /// finite `v` and NaN for a NaN or an infinity.
 #[inline(always)]

@@ -1,26 +1,18 @@
-//! Regression: the faithful Verlet solver keeps the results it had before it was optimised.
+//! Regression: the faithful Verlet solver keeps the bits of the course's step.
 //!
-//! The fingerprints in `tests/fingerprints/` were written by the original, straightforward
-//! implementation (commit "Fingerprint the faithful solver before optimising") after 90 frames of
-//! the course's `pinned2` and `pinned4` scenes. Every optimisation of the solver must reproduce
-//! them to within `TOLERANCE`.
+//! The fingerprints in `tests/fingerprints/` hold 90 frames of the course's `pinned2` and
+//! `pinned4` scenes as the course's step computes them (`reference_step`, spring by spring). The
+//! fast path promises the same operations in the same order, so the check is exact: every sampled
+//! coordinate and every coordinate sum must have the fingerprint's bits.
 //!
 //! To re-take a fingerprint (only when the *model* deliberately changes, never to make a speed-up
 //! pass), run `CLOTHSIM_BLESS_FINGERPRINTS=1 cargo test -p cloth-solver --test faithful_fingerprint`.
-//! With `CLOTHSIM_FINGERPRINT_EXACT=1` the sampled coordinates must also be bit-identical.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use cloth_mesh::{ClothMesh, ClothState, GridSpec, Orientation};
-use cloth_solver::{StepParams, Verlet, advance_frame};
-
-/// Metres. The bar for the fast paths: the optimised solver must stay within 1e-9 m of the original after
-/// 90 frames (2,700 steps). Rounding differences of a reordered sum are ~1e-17 m per step; even
-/// amplified by the cloth's wrinkling over 2,700 steps they stay far below 1e-9 m unless the
-/// *model* changed (a different sweep order, a missed pair in self-collision, a different
-/// damping formula), which moves points by 1e-6 m or more within a few frames.
-const TOLERANCE: f64 = 1e-9;
+use cloth_solver::{StepParams, Verlet, advance_frame, reference_step};
 
 /// Frames simulated before the fingerprint is taken: one second of simulated time at 90 fps,
 /// long enough for the cloth to fall, hit the stretch limit and wrinkle into self-contact.
@@ -30,15 +22,15 @@ const FRAMES: usize = 90;
 /// every column and every row), plus the sums of all coordinates, which catch a change anywhere.
 const STRIDE: usize = 7;
 
-/// The course's standard cloth (spec section 1): 1 x 1 m, 50 x 50 points, thickness 0.0095 m,
-/// horizontal, with the given pins.
+/// The course's standard cloth (spec section 1): 1 x 1 m, 50 x 50 points, thickness 0.0095 m
+/// read as the course's loader reads it (a 32-bit float), horizontal, with the given pins.
 fn mesh(pins: &[(usize, usize)]) -> ClothMesh {
     ClothMesh::new(&GridSpec {
         width: 1.0,
         height: 1.0,
         num_width_points: 50,
         num_height_points: 50,
-        thickness: 0.0095,
+        thickness: f64::from(0.0095_f32),
         orientation: Orientation::Horizontal,
         pinned: pins.to_vec(),
         ..GridSpec::default()
@@ -46,15 +38,31 @@ fn mesh(pins: &[(usize, usize)]) -> ClothMesh {
     .unwrap()
 }
 
-fn run(mesh: &ClothMesh) -> ClothState {
-    // Course defaults: ks 5000, density 150, damping 0.2 %, 30 steps per frame at 90 fps,
-    // self-collision on, stretch limit on.
+/// Course defaults: ks 5000, density 150, damping 0.2 %, 30 steps per frame at 90 fps,
+/// self-collision on, stretch limit on.
+fn params() -> StepParams {
     let params = StepParams::default();
-    assert!(params.self_collision);
+    assert!(params.self_collision && params.stretch_limit);
+    params
+}
+
+/// `FRAMES` frames of the fast Verlet from the start.
+fn run_fast(mesh: &ClothMesh) -> ClothState {
+    let params = params();
     let mut state = ClothState::new(mesh);
     let mut solver = Verlet::new();
     for _ in 0..FRAMES {
         advance_frame(&mut solver, mesh, &[], &params, &mut state).unwrap();
+    }
+    state
+}
+
+/// `FRAMES` frames of the course's step, written plainly, from the start.
+fn run_reference(mesh: &ClothMesh) -> ClothState {
+    let params = params();
+    let mut state = ClothState::new(mesh);
+    for _ in 0..FRAMES as u32 * params.steps_per_frame {
+        reference_step(mesh, &[], &params, &mut state).unwrap();
     }
     state
 }
@@ -91,7 +99,7 @@ impl Fingerprint {
     /// shortest round-trip form, so parsing gives back the exact bits.
     fn to_text(&self, title: &str) -> String {
         let mut out = format!(
-            "# {title}: faithful Verlet after {FRAMES} frames; every {STRIDE}th point: \
+            "# {title}: the course's step after {FRAMES} frames; every {STRIDE}th point: \
              index x y z last_x last_y last_z (metres)\n"
         );
         for (i, v) in &self.samples {
@@ -140,37 +148,43 @@ fn path(name: &str) -> PathBuf {
         .join(format!("{name}.txt"))
 }
 
+/// The fingerprint is taken from the reference step; both it and the fast path must give its
+/// bits.
 fn check(name: &str, pins: &[(usize, usize)]) {
     let mesh = mesh(pins);
-    let now = Fingerprint::of(&run(&mesh));
     let file = path(name);
     if std::env::var_os("CLOTHSIM_BLESS_FINGERPRINTS").is_some() {
+        let now = Fingerprint::of(&run_reference(&mesh));
         std::fs::create_dir_all(file.parent().unwrap()).unwrap();
         std::fs::write(&file, now.to_text(name)).unwrap();
-        return;
     }
     let then = Fingerprint::parse(&std::fs::read_to_string(&file).unwrap());
-    // While optimising it helps to know whether the bits are still the same, not just close.
-    let exact = std::env::var_os("CLOTHSIM_FINGERPRINT_EXACT").is_some();
-    assert_eq!(then.samples.len(), now.samples.len());
-    for ((i, a), (j, b)) in then.samples.iter().zip(&now.samples) {
-        assert_eq!(i, j);
-        for (x, y) in a.iter().zip(b) {
-            assert!(
-                !exact || x.to_bits() == y.to_bits(),
-                "{name}: point {i} is not bit-identical: {a:?} vs {b:?}"
-            );
-            assert!(
-                (x - y).abs() <= TOLERANCE,
-                "{name}: point {i} moved from {a:?} to {b:?}"
+    then.assert_same_bits(
+        &Fingerprint::of(&run_reference(&mesh)),
+        name,
+        "reference step",
+    );
+    then.assert_same_bits(&Fingerprint::of(&run_fast(&mesh)), name, "fast Verlet");
+}
+
+impl Fingerprint {
+    /// Every sampled coordinate and every sum of `now` has this fingerprint's bits.
+    fn assert_same_bits(&self, now: &Self, name: &str, by: &str) {
+        let then = self;
+        let bits = |v: &[f64; 6]| v.map(f64::to_bits);
+        assert_eq!(then.samples.len(), now.samples.len());
+        for ((i, a), (j, b)) in then.samples.iter().zip(&now.samples) {
+            assert_eq!(i, j);
+            assert_eq!(
+                bits(a),
+                bits(b),
+                "{name}, {by}: point {i} is not bit-identical: {a:?} vs {b:?}"
             );
         }
-    }
-    // Each sum adds 2,500 coordinates, each allowed TOLERANCE.
-    for (x, y) in then.sums.iter().zip(&now.sums) {
-        assert!(
-            (x - y).abs() <= TOLERANCE * mesh.len() as f64,
-            "{name}: coordinate sums moved from {:?} to {:?}",
+        assert_eq!(
+            bits(&then.sums),
+            bits(&now.sums),
+            "{name}, {by}: coordinate sums moved from {:?} to {:?}",
             then.sums,
             now.sums
         );

@@ -39,6 +39,18 @@ fn course_scenes_read_as_the_spec_states() {
 }
 
 #[test]
+fn thickness_is_read_as_the_courses_32_bit_float() {
+    // The course's loader stores the thickness in a `float`: the standard scenes' 0.0095 m is
+    // 0.00949999969... m there, and self-collision's reach is twice that.
+    let p4 = load("pinned4", &[]).unwrap();
+    assert_eq!(
+        p4.mesh.thickness().to_bits(),
+        f64::from(0.0095_f32).to_bits()
+    );
+    assert_ne!(p4.mesh.thickness(), 0.0095);
+}
+
+#[test]
 fn set_overrides_reach_the_parameters() {
     let sets = [
         "cloth.ks=100000",

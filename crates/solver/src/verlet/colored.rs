@@ -39,16 +39,20 @@ use cloth_mesh::Vec3;
 use super::sweep::{DIRECTIONS, Stencil, offsets, valid_columns};
 use crate::disjoint::Disjoint;
 use crate::self_collision::PARALLEL_CHUNK;
+#[cfg(target_arch = "x86_64")]
+use crate::simd::Avx2;
+use crate::simd::Simd;
 use crate::stretch::{Points, limit_one};
 
 /// One sweep of the stretch limit at `ratio` over `stencil`'s springs, class by class (see the
-/// module), on `pool`'s threads when there is one.
+/// module), on `pool`'s threads when there is one, on AVX2 lanes when `simd` has them.
 pub(crate) fn limit_colored(
     stencil: &Stencil,
     pinned: &[bool],
     positions: &mut [Vec3],
     ratio: f64,
     pool: Option<&ThreadPool>,
+    simd: Simd,
 ) {
     let (nw, nh) = (stencil.nw(), stencil.nh());
     let offsets = offsets(nw);
@@ -67,6 +71,7 @@ pub(crate) fn limit_colored(
                 nw,
                 ratio,
                 pinned,
+                simd,
             };
             let shared = Disjoint::new(positions);
             match pool {
@@ -147,6 +152,7 @@ struct Springs<'a> {
     nw: usize,
     ratio: f64,
     pinned: &'a [bool],
+    simd: Simd,
 }
 
 impl Springs<'_> {
@@ -167,11 +173,11 @@ impl Springs<'_> {
         #[allow(unsafe_code)]
         let mut points = unsafe { View::new(shared) };
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
+        if let Some(avx2) = self.simd.avx2() {
+            // SAFETY: the CPU runs AVX2: an `Avx2` exists.
             #[allow(unsafe_code)]
             unsafe {
-                self.rows_avx2(&mut points, rows);
+                self.rows_avx2(avx2, &mut points, rows);
             }
             return;
         }
@@ -180,13 +186,10 @@ impl Springs<'_> {
 
     /// [`Springs::rows`] compiled for AVX2, with [`limit_group_avx2`]: four springs' checks
     /// and corrections at once, the same operations, so the same corrections.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[allow(unsafe_code)]
     #[target_feature(enable = "avx2")]
-    unsafe fn rows_avx2(&self, points: &mut View<'_>, rows: std::ops::Range<usize>) {
+    fn rows_avx2(&self, _: Avx2, points: &mut View<'_>, rows: std::ops::Range<usize>) {
         let layout = Layout::of(self.class);
         self.rows(points, rows, |a, rest, points| {
             debug_assert!({
@@ -309,13 +312,7 @@ impl Layout {
 /// cloth a third of the checked springs are over the limit, in no pattern a predictor learns.
 /// Whole-vector loads and stores, rather than a point at a time, because the ends of a group
 /// are consecutive points: 6 loads, 6 stores and about two dozen shuffles in place of 24 scalar
-/// loads with inserts and 24 scalar stores (the 256 x 256 frame without self-collision: 0.77 x
-/// the time with a point-at-a-time gather).
-///
-/// Measured and left out: queueing the springs outside the bound and correcting them four at a
-/// time, so every square root and division does four springs' work (nearly every group holds
-/// one such spring, a third of the lanes). The queued springs must be gathered and scattered a
-/// point at a time, and the frame took 1.3 x as long.
+/// loads with inserts and 24 scalar stores.
 ///
 /// # Safety
 /// The CPU must support AVX2.
@@ -681,10 +678,22 @@ mod tests {
             reference(&mesh, &mut expected);
             let changed = expected.iter().zip(&start).filter(|(a, b)| a != b).count();
             assert!(changed > mesh.len() / 4, "{nw} x {nh}: too few corrections");
-            for pool in [None, Some(&pool)] {
-                let mut colored = start.clone();
-                limit_colored(&stencil, mesh.pinned(), &mut colored, MAX_STRETCH, pool);
-                assert_same_bits(&colored, &expected);
+            for (pool, simd) in [None, Some(&pool)]
+                .into_iter()
+                .zip([Simd::PORTABLE, Simd::detect()])
+            {
+                for simd in [simd, Simd::detect()] {
+                    let mut colored = start.clone();
+                    limit_colored(
+                        &stencil,
+                        mesh.pinned(),
+                        &mut colored,
+                        MAX_STRETCH,
+                        pool,
+                        simd,
+                    );
+                    assert_same_bits(&colored, &expected);
+                }
             }
             // Pinned points never move.
             for (i, _) in mesh.pinned().iter().enumerate().filter(|(_, p)| **p) {
@@ -701,7 +710,14 @@ mod tests {
         let mut expected = start.clone();
         reference(&mesh, &mut expected);
         let mut colored = start;
-        limit_colored(&stencil, mesh.pinned(), &mut colored, MAX_STRETCH, None);
+        limit_colored(
+            &stencil,
+            mesh.pinned(),
+            &mut colored,
+            MAX_STRETCH,
+            None,
+            Simd::detect(),
+        );
         assert_same_bits(&colored, &expected);
         assert!(colored[40].x.is_nan());
     }

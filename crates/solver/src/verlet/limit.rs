@@ -37,6 +37,9 @@ use super::sweep::{DIRECTIONS, Stencil, offsets, valid_columns};
 
 #[cfg(target_arch = "x86_64")]
 mod prepass;
+#[cfg(target_arch = "x86_64")]
+use crate::simd::Avx2;
+use crate::simd::Simd;
 use crate::stretch::{Band, StretchBands, for_each_band, inside_bound, limit_one};
 
 /// The sweep's bounds and scratch memory, built for one stencil (rebuilt with it).
@@ -53,15 +56,16 @@ pub(crate) struct StretchSweep {
 enum RowBuild {
     /// The portable rows (`marks_row`).
     Portable,
-    /// `prepass::marks_row_avx2`.
-    Avx2,
-    /// `prepass::marks_row_avx512vl`: the same operations with 32 vector registers.
-    Avx512Vl,
+    /// `prepass::marks_row_avx2`, on a CPU that runs it.
+    #[cfg(target_arch = "x86_64")]
+    Avx2(Avx2),
 }
 
 /// What every band reads.
 #[derive(Debug, Default, Clone)]
 struct Bounds {
+    /// The vector instructions the pre-pass may use.
+    simd: Simd,
     /// The stretch ratio the bounds were computed for.
     ratio: f64,
     /// Per direction: the smallest [`inside_bound`] of its springs.
@@ -87,7 +91,7 @@ struct BandScratch {
 
 impl StretchSweep {
     /// Bounds and scratch for sweeps of `stencil`'s springs at the stretch `ratio`.
-    pub(crate) fn new(stencil: &Stencil, ratio: f64) -> Self {
+    pub(crate) fn new(stencil: &Stencil, ratio: f64, simd: Simd) -> Self {
         let (nw, nh) = (stencil.nw(), stencil.nh());
         let exists: Vec<u8> = (0..nw * nh)
             .map(|i| exists_mask(nw, i % nw, i / nw))
@@ -102,6 +106,7 @@ impl StretchSweep {
         }
         Self {
             bounds: Bounds {
+                simd,
                 ratio,
                 floor,
                 exists,
@@ -177,8 +182,8 @@ impl BandScratch {
         let look = &mut self.look[..];
         // NOTE: a moved point marks, in each direction, the emitter whose spring ends at it,
         // rather than each emitter reading its six partners' moved flags: corrections are rare
-        // (about 0.3 per point per step on `pinned4`), so twelve marks per correction cost less
-        // than six loads per emitter (measured: 4 % of a `pinned4` step). Marks left for
+        // (well under one per point and step on a hanging cloth), so twelve marks per correction
+        // cost less than six loads per emitter. Marks left for
         // emitters already swept, or outside the band, land in the margins and are never read.
         let mark = |look: &mut [u8], p: usize| {
             let at = margin + p - base;
@@ -227,55 +232,44 @@ impl BandScratch {
         rows: Range<usize>,
     ) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            let build = if super::sweep::avx512vl() {
-                RowBuild::Avx512Vl
-            } else {
-                RowBuild::Avx2
-            };
-            // SAFETY: the CPU supports AVX2, and AVX-512VL for that build, checked just above.
+        if let Some(avx2) = bounds.simd.avx2() {
+            // SAFETY: the CPU runs AVX2: an `Avx2` exists.
             #[allow(unsafe_code)]
             unsafe {
-                self.prepass_avx2(bounds, stencil, positions, first, rows, build);
+                self.prepass_avx2(avx2, bounds, stencil, positions, first, rows);
             }
             return;
         }
-        // SAFETY: the portable rows.
-        #[allow(unsafe_code)]
-        unsafe {
-            self.prepass_rows(bounds, stencil, positions, first, rows, RowBuild::Portable);
-        }
+        self.prepass_rows(bounds, stencil, positions, first, rows, RowBuild::Portable);
     }
 
     /// The pre-pass compiled for AVX2: the copy vectorised by the compiler, the rows with
-    /// every partner row in the window by `build`'s row function.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2, and run `build`.
+    /// every partner row in the window by `prepass::marks_row_avx2`.
     #[cfg(target_arch = "x86_64")]
-    #[allow(unsafe_code)]
     #[target_feature(enable = "avx2")]
-    unsafe fn prepass_avx2(
+    fn prepass_avx2(
         &mut self,
+        avx2: Avx2,
         bounds: &Bounds,
         stencil: &Stencil,
         positions: &[Vec3],
         first: usize,
         rows: Range<usize>,
-        build: RowBuild,
     ) {
-        // SAFETY: this function's contract.
-        unsafe { self.prepass_rows(bounds, stencil, positions, first, rows, build) };
+        self.prepass_rows(
+            bounds,
+            stencil,
+            positions,
+            first,
+            rows,
+            RowBuild::Avx2(avx2),
+        );
     }
 
     /// The pre-pass itself, for whatever instruction set the caller was compiled for; the rows
     /// with every partner row in the window take `build`'s row function.
-    ///
-    /// # Safety
-    /// The CPU must run `build`.
-    #[allow(unsafe_code)]
     #[inline(always)]
-    unsafe fn prepass_rows(
+    fn prepass_rows(
         &mut self,
         bounds: &Bounds,
         stencil: &Stencil,
@@ -292,14 +286,10 @@ impl BandScratch {
             let (floor, a0) = (&bounds.floor, y * nw - first);
             match build {
                 #[cfg(target_arch = "x86_64")]
-                // SAFETY: the CPU runs `build` (this function's contract).
-                RowBuild::Avx2 if y >= 2 && nw >= 4 => unsafe {
+                // SAFETY: the CPU runs AVX2: an `Avx2` exists.
+                #[allow(unsafe_code)]
+                RowBuild::Avx2(_) if y >= 2 && nw >= 4 => unsafe {
                     prepass::marks_row_avx2(&self.soa, floor, a0, out);
-                },
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: as above.
-                RowBuild::Avx512Vl if y >= 2 && nw >= 4 => unsafe {
-                    prepass::marks_row_avx512vl(&self.soa, floor, a0, out);
                 },
                 _ => marks_row(&self.soa, bounds, &mut self.row_marks, nw, y, first, out),
             }
@@ -397,7 +387,7 @@ mod tests {
         let mut course = start.clone();
         limit_stretch(mesh.springs(), mesh.pinned(), &mut course, MAX_STRETCH);
         let mut fast = start.clone();
-        let mut sweep = StretchSweep::new(&stencil, MAX_STRETCH);
+        let mut sweep = StretchSweep::new(&stencil, MAX_STRETCH, Simd::detect());
         sweep.limit(&stencil, mesh.pinned(), &mut fast);
         let changed = course.iter().zip(&start).filter(|(a, b)| a != b).count();
         assert!(
@@ -479,7 +469,11 @@ mod tests {
             let mut course = start.clone();
             limit_stretch(mesh.springs(), mesh.pinned(), &mut course, MAX_STRETCH);
             let mut fast = start.clone();
-            StretchSweep::new(&stencil, MAX_STRETCH).limit(&stencil, mesh.pinned(), &mut fast);
+            StretchSweep::new(&stencil, MAX_STRETCH, Simd::detect()).limit(
+                &stencil,
+                mesh.pinned(),
+                &mut fast,
+            );
             assert_same_bits(&fast, &course);
             for (all, this) in cascades.iter_mut().zip(cascaded(&mesh, &start)) {
                 *all += this;
@@ -511,7 +505,7 @@ mod tests {
                 limit_stretch(&springs, mesh.pinned(), &mut course, MAX_STRETCH);
             }
             let mut fast = start.clone();
-            StretchSweep::new(&stencil, MAX_STRETCH).limit_bands(
+            StretchSweep::new(&stencil, MAX_STRETCH, Simd::detect()).limit_bands(
                 &stencil,
                 &bands,
                 mesh.pinned(),
@@ -530,7 +524,7 @@ mod tests {
         rows: Range<usize>,
     ) -> (Vec<Vec<u8>>, Vec<u8>) {
         let nw = stencil.nw();
-        let sweep = StretchSweep::new(stencil, MAX_STRETCH);
+        let sweep = StretchSweep::new(stencil, MAX_STRETCH, Simd::detect());
         let first = rows.start.saturating_sub(2) * nw;
         let window = &positions[first..rows.end * nw];
         let emitters = rows.start * nw..rows.end * nw;
@@ -540,11 +534,7 @@ mod tests {
             scratch.look.resize(margin + emitters.len() + margin, 0);
             let (bounds, rows) = (&sweep.bounds, rows.clone());
             match build {
-                // SAFETY: the builds passed in are the portable one and those the CPU runs.
-                #[allow(unsafe_code)]
-                Some(build) => unsafe {
-                    scratch.prepass_rows(bounds, stencil, window, first, rows, build);
-                },
+                Some(build) => scratch.prepass_rows(bounds, stencil, window, first, rows, build),
                 None => scratch.prepass(bounds, stencil, window, first, rows),
             }
             let exists = &sweep.bounds.exists[emitters.clone()];
@@ -556,16 +546,8 @@ mod tests {
                 .collect::<Vec<u8>>()
         };
         let portable = run(Some(RowBuild::Portable));
-        // The dispatched build, and every build this CPU runs.
-        let mut builds = vec![run(None)];
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            builds.push(run(Some(RowBuild::Avx2)));
-            if super::super::sweep::avx512vl() {
-                builds.push(run(Some(RowBuild::Avx512Vl)));
-            }
-        }
-        (builds, portable)
+        // The dispatched build.
+        (vec![run(None)], portable)
     }
 
     #[test]

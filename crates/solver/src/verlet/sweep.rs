@@ -36,6 +36,7 @@
 use cloth_mesh::{ClothMesh, GridSpec, SpringKind, Vec3};
 
 use crate::SolveError;
+use crate::simd::{Avx2, Simd};
 
 #[cfg(target_arch = "x86_64")]
 mod fused;
@@ -50,66 +51,8 @@ pub(crate) const DIRECTIONS: [(isize, isize, SpringKind); 6] = [
     (0, -2, SpringKind::Bending),
 ];
 
-/// Whether the CPU runs AVX-512VL (with AVX-512F), which the second builds of the 256-bit loops
-/// use for its 32 vector registers (checked once, then a cached flag).
-#[cfg(target_arch = "x86_64")]
-pub(crate) fn avx512vl() -> bool {
-    std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512vl")
-}
-
-/// Which build of the fused pass (`sweep/fused.rs`) a sweep's rows take, if any.
-///
-/// NOTE: only [`Fused::detect`] (and, in tests, [`Fused::builds`]) make one other than
-/// [`Fused::OFF`], after checking that the CPU runs its instructions; the build is private to
-/// this module. So holding a `Fused` is the proof the `unsafe` calls of the pass rest on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Fused(Build);
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-enum Build {
-    Off,
-    /// The pass compiled for AVX2.
-    Avx2,
-    /// The same 256-bit pass compiled with AVX-512VL as well: the very same operations, but
-    /// with 32 vector registers instead of 16 (VL encodes AVX-512's extra registers for 256-bit
-    /// operations). The pass keeps about 40 vectors live in a column group (six springs'
-    /// directions and lengths, the constants, the sums), so with 16 it spills and reloads
-    /// them around every division; measured 0.97 x the AVX2 build's `pinned4` step. Full
-    /// 512-bit vectors were slower (see the README).
-    Avx512Vl,
-}
-
-impl Fused {
-    /// No fused pass: every row takes the portable loops.
-    pub(crate) const OFF: Self = Self(Build::Off);
-
-    /// The fastest build this CPU runs (checked once, then a cached flag).
-    pub(crate) fn detect() -> Self {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            let build = if avx512vl() {
-                Build::Avx512Vl
-            } else {
-                Build::Avx2
-            };
-            return Self(build);
-        }
-        Self::OFF
-    }
-
-    /// Every build this CPU runs, for tests that compare them.
-    #[cfg(all(test, target_arch = "x86_64"))]
-    pub(crate) fn builds() -> Vec<Self> {
-        let best = Self::detect();
-        match best.0 {
-            Build::Avx512Vl => vec![Self(Build::Avx2), best],
-            Build::Avx2 => vec![best],
-            Build::Off => vec![],
-        }
-    }
-}
+/// Whether a sweep's rows take the fused pass (`sweep/fused.rs`): its AVX2 proof when they do.
+pub(crate) type Fused = Option<Avx2>;
 
 /// Zero columns on each side of a row buffer, so a point can read the forces of springs emitted
 /// up to two columns away without bounds tests.
@@ -134,16 +77,12 @@ macro_rules! ring_strides {
         /// or 1.5 times one, plus `2 PAD` (so rows of a power of two points fit exactly).
         const RING_STRIDES: &[usize] = &[$($stride),+];
 
-        /// Runs `build`'s fused pass (a build other than [`Build::Off`]) compiled for the
-        /// scratch's stride, or the one with the stride a variable when it is not in
-        /// [`RING_STRIDES`].
-        ///
-        /// # Safety
-        /// The CPU must run `build` (see [`Fused`]).
+        /// Runs the fused pass compiled for the scratch's stride, or the one with the stride a
+        /// variable when it is not in [`RING_STRIDES`].
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code, clippy::too_many_arguments)]
-        unsafe fn fused_pass(
-            build: Build,
+        fn fused_pass(
+            _: Avx2,
             stencil: &Stencil,
             scratch: &mut RowScratch,
             params: &SweepParams,
@@ -152,22 +91,14 @@ macro_rules! ring_strides {
             ahead: &[Vec3],
             next: &mut [Vec3],
         ) -> usize {
-            // SAFETY (every call): the caller's contract.
+            // SAFETY: the pass is compiled for AVX2, which the CPU runs: an `Avx2` exists.
             unsafe {
-                match (build, scratch.stride) {
+                match scratch.stride {
                     $(
-                        (Build::Avx2, $stride) => stencil
+                        $stride => stencil
                             .emit_sum_integrate_avx2::<$stride>(scratch, params, y, positions, ahead, next),
-                        (Build::Avx512Vl, $stride) => stencil
-                            .emit_sum_integrate_avx512vl::<$stride>(scratch, params, y, positions, ahead, next),
                     )+
-                    (Build::Avx2, _) => {
-                        stencil.emit_sum_integrate_avx2::<0>(scratch, params, y, positions, ahead, next)
-                    }
-                    (Build::Avx512Vl, _) => {
-                        stencil.emit_sum_integrate_avx512vl::<0>(scratch, params, y, positions, ahead, next)
-                    }
-                    (Build::Off, _) => unreachable!("no fused pass is run without a build"),
+                    _ => stencil.emit_sum_integrate_avx2::<0>(scratch, params, y, positions, ahead, next),
                 }
             }
         }
@@ -306,11 +237,12 @@ impl Stencil {
     /// rows) and `last` (rows `r0..r1`, in `next`), and writes each new position into `next`
     /// (pinned points keep theirs).
     ///
-    /// Runs the AVX2 build of the sweep when the CPU has it (see [`Stencil::sweep_avx2`]), with
-    /// the best build of the fused pass it runs ([`Fused::detect`]).
+    /// Runs the AVX2 build of the sweep, with the fused pass, when `simd` has AVX2 (see
+    /// [`Stencil::sweep_avx2`]).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn sweep(
         &self,
+        simd: Simd,
         scratch: &mut RowScratch,
         params: &SweepParams,
         positions: &[Vec3],
@@ -319,17 +251,16 @@ impl Stencil {
         r0: usize,
         r1: usize,
     ) {
-        let fused = Fused::detect();
         #[cfg(target_arch = "x86_64")]
-        if fused != Fused::OFF {
-            // SAFETY: a fused build is only detected on a CPU with AVX2 (see `Fused`).
+        if let Some(avx2) = simd.avx2() {
+            // SAFETY: the CPU runs AVX2: an `Avx2` exists.
             #[allow(unsafe_code)]
             unsafe {
-                self.sweep_avx2(fused, scratch, params, positions, pinned, next, r0, r1);
+                self.sweep_avx2(avx2, scratch, params, positions, pinned, next, r0, r1);
             }
             return;
         }
-        self.sweep_rows(fused, scratch, params, positions, pinned, next, r0, r1);
+        self.sweep_rows(None, scratch, params, positions, pinned, next, r0, r1);
     }
 
     /// The sweep compiled for AVX2: four f64 lanes per instruction instead of baseline
@@ -339,15 +270,12 @@ impl Stencil {
     /// multiply-add rounds once where the course rounds twice), and Rust never contracts or
     /// reassociates float operations, so every lane does the same IEEE operations in the same
     /// order as the portable build: the results are bit-identical (tested below).
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
-    #[allow(unsafe_code, clippy::too_many_arguments)]
+    #[allow(clippy::too_many_arguments)]
     #[target_feature(enable = "avx2")]
-    unsafe fn sweep_avx2(
+    fn sweep_avx2(
         &self,
-        fused: Fused,
+        avx2: Avx2,
         scratch: &mut RowScratch,
         params: &SweepParams,
         positions: &[Vec3],
@@ -356,12 +284,12 @@ impl Stencil {
         r0: usize,
         r1: usize,
     ) {
-        self.sweep_rows(fused, scratch, params, positions, pinned, next, r0, r1);
+        self.sweep_rows(Some(avx2), scratch, params, positions, pinned, next, r0, r1);
     }
 
     /// The sweep itself, for whatever instruction set the caller was compiled for: everything
     /// it calls is inlined into it, so [`Stencil::sweep_avx2`] vectorises all of it. With
-    /// [`Fused::OFF`] it is the portable sweep; otherwise the rows that can take it emit their
+    /// no fused pass it is the portable sweep; otherwise the rows that can take it emit their
     /// springs, and sum and integrate two rows behind, in one pass of the given build
     /// (`fused`).
     #[allow(clippy::too_many_arguments)]
@@ -399,7 +327,7 @@ impl Stencil {
         for y in r0..(r1 + 2) {
             // Rows before `r0 + 2` have no row of this band to sum; past the last row there is
             // nothing to emit.
-            let fuse = fused != Fused::OFF && y >= r0 + 2 && self.fusable(params, y);
+            let fuse = fused.is_some() && y >= r0 + 2 && self.fusable(params, y);
             if y < nh {
                 if !loaded {
                     self.load_row(scratch, positions, y);
@@ -419,28 +347,24 @@ impl Stencil {
                 };
                 loaded = fuse && !ahead.is_empty();
                 let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
-                // Columns already integrated by the fused pass (`fuse` is never set off
-                // x86-64, see `Fused`).
-                let done = if fuse {
+                // Columns already integrated by the fused pass.
+                let done = match fused {
                     #[cfg(target_arch = "x86_64")]
-                    // SAFETY: a `Fused` of a build is only made on CPUs that run it.
-                    #[allow(unsafe_code)]
-                    unsafe {
-                        fused_pass(fused.0, self, scratch, params, y, positions, ahead, row)
+                    Some(avx2) if fuse => {
+                        fused_pass(avx2, self, scratch, params, y, positions, ahead, row)
                     }
-                    #[cfg(not(target_arch = "x86_64"))]
-                    unreachable!("`fuse` is never set off x86-64")
-                } else {
-                    self.sum_row(scratch, params, r);
-                    0
+                    _ => {
+                        self.sum_row(scratch, params, r);
+                        0
+                    }
                 };
                 let total = &scratch.total;
                 integrate_row(total, stride, params, positions, pinned, row, done);
             }
         }
         // NOTE: the fused pass integrates pinned points like any other, so they are put back
-        // here, from the list of pins, rather than by testing every point's flag in each row
-        // (that test was 2 % of a `pinned4` step).
+        // here, from the list of pins (a handful), rather than by testing every point's flag
+        // in each row.
         let band = r0 * nw..r1 * nw;
         let first = self.pins.partition_point(|&i| i < band.start);
         for &i in self.pins[first..].iter().take_while(|&&i| i < band.end) {
@@ -511,8 +435,8 @@ impl Stencil {
         // Direction t, component c of emitter row `row`, starting `shift` columns to the right
         // of each point; a row past the last one emits nothing (zeros: subtracting +0.0 leaves
         // every sum unchanged).
-        // NOTE: plain calls, not `array::map`: its closures were not inlined into the AVX2
-        // build and cost about 4 % of a `pinned4` step in call overhead.
+        // NOTE: plain calls, not `array::map`: its closures are not inlined into the AVX2
+        // build, and a call per slice would sit in the loop.
         let term = |row: usize, t: usize, c: usize, shift: isize| -> &[f64] {
             if row >= self.nh {
                 return zeros;
@@ -670,7 +594,7 @@ mod tests {
         let pinned = mesh.pinned();
         let mut portable = last[band.clone()].to_vec();
         stencil.sweep_rows(
-            Fused::OFF,
+            None,
             &mut RowScratch::default(),
             &params,
             &positions,
@@ -682,6 +606,7 @@ mod tests {
         assert_ne!(portable, last[band.clone()], "the sweep moved the points");
         let mut dispatched = last[band.clone()].to_vec();
         stencil.sweep(
+            Simd::detect(),
             &mut RowScratch::default(),
             &params,
             &positions,
@@ -691,26 +616,6 @@ mod tests {
             rows.end,
         );
         assert_same_bits(&dispatched, &portable);
-        // Every build of the fused pass this CPU runs, not only the one dispatched.
-        #[cfg(target_arch = "x86_64")]
-        for fused in Fused::builds() {
-            let mut built = last[band.clone()].to_vec();
-            // SAFETY: `builds` lists only builds this CPU runs, all on AVX2 CPUs.
-            #[allow(unsafe_code)]
-            unsafe {
-                stencil.sweep_avx2(
-                    fused,
-                    &mut RowScratch::default(),
-                    &params,
-                    &positions,
-                    pinned,
-                    &mut built,
-                    rows.start,
-                    rows.end,
-                );
-            }
-            assert_same_bits(&built, &portable);
-        }
     }
 
     #[test]
@@ -777,6 +682,7 @@ mod tests {
             let run = |scratch: &mut RowScratch| {
                 let mut next = mesh.start_positions().to_vec();
                 stencil.sweep(
+                    Simd::detect(),
                     scratch,
                     &params(bending),
                     &positions,

@@ -49,7 +49,7 @@ macro_rules! marks_row {
             );
             // NOTE: every stream is checked once a row, as a slice of exactly `nw` values, and
             // the loop reads lanes `j..j + 4` of it through a pointer: checking each load (21 a
-            // group, two compares and branches each) was 40 % of the loop's instructions. The
+            // group, two compares and branches each) would outnumber the arithmetic. The
             // pointers are the three rows' (`dy` = 0, 1, 2) plus the direction's `dx`, a
             // constant once the direction loop is unrolled, so nine registers address all 21
             // streams.
@@ -108,11 +108,4 @@ marks_row!(
     /// When a partner or an emitter is outside `soa` (never, under the conditions above).
     marks_row_avx2,
     "avx2"
-);
-
-marks_row!(
-    /// [`marks_row_avx2`] compiled with AVX-512VL as well, for its 32 vector registers (the
-    /// AVX2 build keeps three of its vectors on the stack): the very same 256-bit operations.
-    marks_row_avx512vl,
-    "avx2,avx512f,avx512vl"
 );

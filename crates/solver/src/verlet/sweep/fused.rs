@@ -47,7 +47,7 @@ fn stream(s: &[f64], start: usize, shift: isize, len: usize) -> &[f64] {
 /// NOTE: a macro, not one `#[inline(always)]` body shared by two thin wrappers: the body's
 /// closures (`array::map`) inherit the target features of the function they are written in,
 /// and only then are they and their intrinsics inlined. Written in a featureless body they
-/// became calls in the loop (measured: `try_map` calls for every column group).
+/// become calls in the loop (`try_map` calls for every column group).
 macro_rules! fused_pass {
     ($(#[$doc:meta])* $name:ident, $features:literal) => {
         impl Stencil {
@@ -168,8 +168,7 @@ macro_rules! fused_pass {
                             // NOTE: row y + 1's copy into the ring, four points' `x y z | x y z
                             // ...` split into `x`, `y` and `z` by register shuffles, is done here,
                             // in the divider's shadow, rather than in a loop of its own before
-                            // the row (measured: 3 % of a `pinned4` step). Its slot is none of
-                            // the three this pass reads.
+                            // the row. Its slot is none of the three this pass reads.
                             let m = [0, 4, 8].map(|q| _mm256_loadu_pd(ahead[3 * j + q..][..4].as_ptr()));
                             let xy_even = _mm256_blend_pd::<0b1100>(m[0], m[1]);
                             let yz = _mm256_blend_pd::<0b1100>(m[1], m[2]);
@@ -187,8 +186,7 @@ macro_rules! fused_pass {
                         let av = [0, 1, 2].map(|c| _mm256_loadu_pd(p[0].add(c * stride + PAD + j)));
                         // NOTE: the six square roots first, then the six divisions: each division
                         // waits about 20 cycles for its root, and with the roots issued together
-                        // the divider has the next one queued meanwhile (measured: 0.93 x the
-                        // separate loops' time where root-then-division per direction gave 0.97 x).
+                        // the divider has the next one queued meanwhile.
                         let mut dirs = [[zero; 3]; 6];
                         let mut lens = [zero; 6];
                         for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
@@ -290,11 +288,4 @@ fused_pass!(
     /// `y` must be [`Stencil::fusable`].
     emit_sum_integrate_avx2,
     "avx2"
-);
-
-fused_pass!(
-    /// [`Stencil::emit_sum_integrate_avx2`] compiled with AVX-512VL as well, for its 32
-    /// vector registers (see `Build::Avx512Vl`): the very same 256-bit operations.
-    emit_sum_integrate_avx512vl,
-    "avx2,avx512f,avx512vl"
 );

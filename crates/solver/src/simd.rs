@@ -1,0 +1,44 @@
+//! The one place the solver learns which vector instructions the CPU runs.
+//!
+//! A [`Simd`] is detected once, when a solver (or a [`crate::SpatialHash`]) is built, and handed
+//! to every fast path. The AVX2 builds of the passes take its [`Avx2`] proof as an argument:
+//! holding one is the invariant their `unsafe` calls rest on, and nothing else in the crate asks
+//! the CPU.
+
+/// Proof that the CPU runs AVX2: only [`Simd::detect`] makes one, after asking the CPU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Avx2(());
+
+/// The vector instructions the fast paths may use on this CPU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Simd {
+    avx2: Option<Avx2>,
+}
+
+impl Simd {
+    /// What this CPU runs.
+    pub(crate) fn detect() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            return Self {
+                avx2: Some(Avx2(())),
+            };
+        }
+        Self::PORTABLE
+    }
+
+    /// No vector extension: the portable builds everywhere.
+    pub(crate) const PORTABLE: Self = Self { avx2: None };
+
+    /// AVX2, when the CPU runs it.
+    pub(crate) fn avx2(self) -> Option<Avx2> {
+        self.avx2
+    }
+}
+
+impl Default for Simd {
+    /// [`Simd::detect`]: a solver built by default uses what the CPU runs.
+    fn default() -> Self {
+        Self::detect()
+    }
+}
