@@ -17,6 +17,7 @@ use cloth_render::{
 use cloth_solver::{Registry, advance_frame};
 
 use crate::solvers;
+use crate::state_file::StateFile;
 
 /// Columns between the panels of `--view all`.
 const GAP: &str = " | ";
@@ -100,6 +101,11 @@ pub struct Args {
     /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).
     #[arg(long)]
     solver: Option<String>,
+    /// Start from a state that `simulate` wrote (its positions and last positions, so the
+    /// cloth keeps its velocity) instead of the scene's flat start; its grid and pins must be
+    /// the scene's. Frame 0 is that state.
+    #[arg(long, value_name = "STATE.json")]
+    from: Option<std::path::PathBuf>,
 }
 
 /// Whether frame `f` (1-based; 0 is the start) of `frames` is printed.
@@ -120,6 +126,10 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     };
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
     let choice = solvers::choose(registry, &scene, args.solver.as_deref())?;
+    let start = match &args.from {
+        Some(path) => StateFile::read(path, &scene.mesh, scene.params.dt())?.1,
+        None => ClothState::new(&scene.mesh),
+    };
     let views = args.view.views();
     let options = RenderOptions {
         mode: args.mode,
@@ -131,7 +141,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     // animation does not jump. The simulation is deterministic, so the second pass replays
     // exactly the same states.
     let mut extent: Option<Bounds> = None;
-    simulate(&scene, &choice, args, |_, state| {
+    simulate(&scene, &choice, args, &start, |_, state| {
         let b = Bounds::of_scene(&state.positions, &scene.colliders)?;
         extent = Some(extent.map_or(b, |e| e.union(&b)));
         Ok(())
@@ -146,7 +156,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     let mut first = true;
-    let result = simulate(&scene, &choice, args, |_, state| {
+    let result = simulate(&scene, &choice, args, &start, |_, state| {
         for (view, panel) in views.iter().zip(panels.iter_mut()) {
             let spec = ViewSpec {
                 extent: Extent::Fixed(extent),
@@ -180,16 +190,17 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     }
 }
 
-/// Simulates `args.frames` frames, calling `each` with the frame number and state of every
-/// printed frame.
+/// Simulates `args.frames` frames from `start`, calling `each` with the frame number and state
+/// of every printed frame.
 fn simulate(
     scene: &cloth_scene::Scene,
     choice: &solvers::Choice,
     args: &Args,
+    start: &ClothState,
     mut each: impl FnMut(u64, &ClothState) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
     let mut solver = choice.build(&scene.mesh)?;
-    let mut state = ClothState::new(&scene.mesh);
+    let mut state = start.clone();
     if printed(0, args.frames, args.every) {
         each(0, &state)?;
     }

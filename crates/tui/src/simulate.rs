@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use anyhow::Context;
 use cloth_mesh::{ClothMesh, ClothState, vertex_normals};
 use cloth_solver::{Registry, advance_frame};
-use serde::Serialize;
 
+use crate::state_file::StateFile;
 use crate::{output, solvers};
 
 /// Arguments of `clothsim simulate`.
@@ -25,20 +25,15 @@ pub struct Args {
     /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).
     #[arg(long)]
     solver: Option<String>,
-    /// Where to write the final state: a `.json` file (positions) or a `.obj` file (mesh).
-    /// Without it, JSON goes to stdout.
+    /// Where to write the final state: a `.json` file (positions and last positions) or a
+    /// `.obj` file (mesh). Without it, JSON goes to stdout.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
-}
-
-/// The JSON written by `simulate`.
-#[derive(Serialize)]
-struct FinalState {
-    num_width_points: usize,
-    num_height_points: usize,
-    frames: u64,
-    time: f64,
-    positions: Vec<[f64; 3]>,
+    /// Start from a state that `simulate` wrote (its positions and last positions, so the
+    /// cloth keeps its velocity) instead of the scene's flat start; its grid and pins must be
+    /// the scene's. The frames and time written continue from the state's.
+    #[arg(long, value_name = "STATE.json")]
+    from: Option<PathBuf>,
 }
 
 enum Format {
@@ -68,8 +63,14 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
     let mut solver =
         solvers::choose(registry, &scene, args.solver.as_deref())?.build(&scene.mesh)?;
-    let mut state = ClothState::new(&scene.mesh);
     let params = scene.params;
+    let (start_frames, start_time, mut state) = match &args.from {
+        Some(path) => {
+            let (file, state) = StateFile::read(path, &scene.mesh, params.dt())?;
+            (file.frames, file.time, state)
+        }
+        None => (0, 0.0, ClothState::new(&scene.mesh)),
+    };
 
     let progress = progress_bar(args.frames);
     for frame in 0..args.frames {
@@ -91,13 +92,13 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
 
     let bytes = match format {
         Format::Json => {
-            let fs = FinalState {
-                num_width_points: scene.mesh.nw(),
-                num_height_points: scene.mesh.nh(),
-                frames: args.frames,
-                time: args.frames as f64 / params.frames_per_sec,
-                positions: state.positions.iter().map(|p| [p.x, p.y, p.z]).collect(),
-            };
+            let fs = StateFile::new(
+                &scene.mesh,
+                &state,
+                start_frames.saturating_add(args.frames),
+                start_time + args.frames as f64 / params.frames_per_sec,
+                params.dt(),
+            );
             let mut s = serde_json::to_string(&fs)?;
             s.push('\n');
             s.into_bytes()
