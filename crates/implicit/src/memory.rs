@@ -4,7 +4,7 @@
 use std::fmt;
 
 /// A buffer that could not be allocated: what it was for and how large it was.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Allocation {
     /// What the buffer holds.
     pub(crate) what: &'static str,

@@ -361,7 +361,10 @@ fn with_the_limit_the_pinned4_centre_settles_within_5_mm_of_verlets() {
         ..StepParams::default()
     };
     let (_, v) = verlet_rest(&mesh, &params);
-    eprintln!("Verlet's largest stretch ratio at rest {:.5}", max_stretch_ratio(&mesh, &v));
+    eprintln!(
+        "Verlet's largest stretch ratio at rest {:.5}",
+        max_stretch_ratio(&mesh, &v)
+    );
     let centre = mesh.index(25, 25);
     let one_step = StepParams {
         steps_per_frame: 1,

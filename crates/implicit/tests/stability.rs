@@ -51,7 +51,10 @@ fn finite_and_settles(name: &str, scene: &Scene, solver: &mut dyn Solver, params
     );
 }
 
-fn solvers() -> [(&'static str, fn() -> Box<dyn Solver>); 2] {
+/// A solver's name and constructor.
+type Build = (&'static str, fn() -> Box<dyn Solver>);
+
+fn solvers() -> [Build; 2] {
     [
         ("fast-implicit", || Box::new(FastImplicit::new())),
         ("implicit", || Box::new(ImplicitEuler::new())),
