@@ -331,7 +331,7 @@ fn without_the_limit_fast_implicit_holds_verlets_equilibrium() {
             positions: v.positions.clone(),
             last: v.positions.clone(),
         };
-        let mut fast = FastImplicit::new().with_iterations(50);
+        let mut fast = FastImplicit::with_iterations(50);
         let mut drift: f64 = 0.0;
         for _ in 0..180 {
             advance_frame(&mut fast, &mesh, &[], &fast_params, &mut s).expect("finite");
