@@ -9,6 +9,27 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side, Spec};
 
+use crate::memory::{Allocation, check_available, try_filled};
+
+/// The outcome of [`Cholesky::analyse`]: the symbolic factor and the workspace it needs.
+pub(crate) struct Analysis {
+    symbolic: SymbolicCholesky<usize>,
+    scratch: StackReq,
+}
+
+impl Analysis {
+    /// Entries of the factor `L`.
+    pub(crate) fn factor_len(&self) -> usize {
+        self.symbolic.len_val()
+    }
+
+    /// Bytes the numeric factor and its workspace take: its values plus the workspace (the
+    /// symbolic factor itself is already allocated).
+    pub(crate) fn bytes(&self) -> u64 {
+        8 * self.factor_len() as u64 + self.scratch.unaligned_bytes_required() as u64
+    }
+}
+
 /// A symmetric positive-definite matrix with a fixed lower-triangular pattern and its Cholesky
 /// factor.
 ///
@@ -44,36 +65,61 @@ impl std::fmt::Debug for Cholesky {
 impl Cholesky {
     /// Analyses the pattern of an `n x n` matrix given by its lower triangle in compressed
     /// columns (`col_ptr` of length `n + 1`, sorted `row_idx` with every row `>=` its column),
-    /// for solves with up to `rhs_cols` right-hand sides at once.
+    /// for solves with up to `rhs_cols` right-hand sides at once, and allocates the factor.
+    ///
+    /// # Errors
+    /// A message when the analysis fails or the factor does not fit in memory.
     pub(crate) fn new(
         col_ptr: Vec<usize>,
         row_idx: Vec<usize>,
         rhs_cols: usize,
     ) -> Result<Self, String> {
-        let n = col_ptr.len() - 1;
-        let symbolic = {
-            let pattern = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
-            factorize_symbolic_cholesky(
-                pattern,
-                Side::Lower,
-                SymmetricOrdering::Amd,
-                CholeskySymbolicParams::default(),
-            )
-            .map_err(|e| format!("symbolic Cholesky analysis failed: {e:?}"))?
-        };
-        let factor_req = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Spec::default());
-        let solve_req = symbolic.solve_in_place_scratch::<f64>(rhs_cols, Par::Seq);
-        let scratch = MemBuffer::try_new(StackReq::any_of(&[factor_req, solve_req]))
-            .map_err(|_| "out of memory for the Cholesky workspace".to_owned())?;
-        let l_values = vec![0.0; symbolic.len_val()];
+        let analysis = Self::analyse(&col_ptr, &row_idx, rhs_cols)?;
+        check_available(analysis.bytes(), "the Cholesky factor").map_err(|e| e.to_string())?;
+        let l_values = try_filled(analysis.symbolic.len_val(), 0.0, "the Cholesky factor")
+            .map_err(|e| e.to_string())?;
+        let scratch = MemBuffer::try_new(analysis.scratch).map_err(|_| {
+            Allocation {
+                what: "the Cholesky workspace",
+                bytes: analysis.scratch.unaligned_bytes_required() as u64,
+            }
+            .to_string()
+        })?;
         Ok(Self {
             col_ptr,
             row_idx,
-            symbolic,
+            symbolic: analysis.symbolic,
             l_values,
             factored: false,
             scratch,
             rhs_cols,
+        })
+    }
+
+    /// The symbolic analysis alone (fill-reducing ordering and the factor's pattern), which
+    /// tells the memory the factor will need before any of it is allocated.
+    ///
+    /// # Errors
+    /// A message when faer's analysis fails (it reports running out of memory as an error).
+    pub(crate) fn analyse(
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        rhs_cols: usize,
+    ) -> Result<Analysis, String> {
+        let n = col_ptr.len() - 1;
+        let pattern = SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
+        let symbolic = factorize_symbolic_cholesky(
+            pattern,
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| format!("symbolic Cholesky analysis failed: {e:?}"))?;
+        let factor_req = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Spec::default());
+        let solve_req = symbolic.solve_in_place_scratch::<f64>(rhs_cols, Par::Seq);
+        Ok(Analysis {
+            symbolic,
+            scratch: StackReq::any_of(&[factor_req, solve_req]),
         })
     }
 

@@ -24,6 +24,28 @@ pub(crate) fn inertial_prediction(
     );
 }
 
+/// The step under an infinite drag (damping 100 %, where [`StepParams::drag_rate`] is
+/// infinite): the velocity is removed and the free points stay where they are, which is the
+/// limit of the backward-Euler step `x1 = x0 + h v1` with `v1 = (v0 + h F / m) / (1 + c h)` as
+/// `c` grows without bound. Collisions are still applied, so a cloth left inside an object is
+/// pushed out.
+///
+/// # Errors
+/// [`SolveError::NonFinite`] for the first non-finite point.
+pub(crate) fn hold_still(
+    mesh: &ClothMesh,
+    colliders: &[Collider],
+    params: &StepParams,
+    state: &mut ClothState,
+    hash: &mut SpatialHash,
+) -> Result<(), SolveError> {
+    let x = state.positions.clone();
+    let free: Vec<u32> = (0..mesh.len() as u32)
+        .filter(|&i| !mesh.pinned()[i as usize])
+        .collect();
+    commit(mesh, colliders, params, state, &free, &x, hash)
+}
+
 /// Moves the free points to `x` with `last` at their start-of-step positions (so
 /// `(positions - last) / h` is the new velocity), then applies self-collision and the collision
 /// objects as Verlet does, and checks the result.

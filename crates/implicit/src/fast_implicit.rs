@@ -6,67 +6,118 @@
 //! The step minimises the same incremental potential as [`ImplicitEuler`](crate::ImplicitEuler),
 //! `Phi(x) = (1 + c h)/(2 h^2) |x - y|_M^2 + E(x)`, `y = x0 + h v0 / (1 + c h)`, using the
 //! identity `k/2 (|d| - L)^2 = min_{|p| = L} k/2 |d - p|^2` for each spring vector `d`. Starting
-//! from `x = y`, each of the solver's `iterations` iterations does
+//! from `x = y`, each iteration does
 //!
 //! ```text
 //! local:   p_s = L_s d_s / |d_s|                        (per spring, closed form)
-//! global:  (M (1 + c h) / h^2 + sum_s k_s A_s^T A_s) x
-//!              = M (1 + c h) / h^2 y + M g + sum_s A_s^T (k_s p_s - lambda_s u_s)
+//!          q_s = the stretch limit's target (below)
+//! global:  (M (1 + c h) / h^2 + sum_s (k_s + w_s) A_s^T A_s) x
+//!              = M (1 + c h) / h^2 y + M g + sum_s A_s^T (k_s p_s + w_s q_s)
 //! ```
 //!
 //! where `A_s x = x_b - x_a`. The matrix is the same for the three coordinates and does not
 //! depend on `x`: it is factored (faer sparse Cholesky, one scalar unknown per free point) only
-//! when `ks`, the density, the step, the drag, a spring toggle or the topology changes, and each
-//! iteration is two triangular solves with three right-hand sides. Pinned points are eliminated
-//! into the right-hand side.
+//! when `ks`, the density, the step, the drag, a spring toggle, the stretch limit's switch or the
+//! topology changes, and each iteration is two triangular solves with three right-hand sides.
+//! Pinned points are eliminated into the right-hand side. The iterations stop when a global
+//! step moves no point farther than the tolerance ([`FAST_TOLERANCE`] by default), or after the
+//! iteration count (the solver's `iterations` option, [`DEFAULT_ITERATIONS`] by default).
 //!
 //! # The stretch limit
 //!
-//! The limit `|d_s| <= 1.1 L_s` is an inequality constraint on the same minimisation, handled by
-//! a multiplier `lambda_s >= 0` per spring (Uzawa / augmented-Lagrangian dual ascent): after each
-//! global solve `lambda_s <- max(0, lambda_s + rho_s (|d_s| - 1.1 L_s))`, and the next global
-//! step applies the extra tension `lambda_s` along the spring. A stiff penalty spring, as in the
-//! Newton solver, would put its stiffness into the constant matrix for every spring, active or
-//! not; the local/global iteration then crawls (its convergence factor is about
-//! `k_lim / (k_lim + m (1 + c h)/h^2)`, within 1e-4 of 1) and the cloth would freeze. The
-//! multiplier keeps the matrix constant and converges to the constrained minimum, the same state
-//! the penalty approximates. `rho_s = (m (1 + c h)/h^2 + 2 k_s) / 4` is half the inverse of the
-//! largest compliance `|d_s|` can have to a tension on its own spring (that of an isolated pair of
-//! points), so a single constraint's update never overshoots. The multipliers are warm-started
-//! from the previous step (a cache: [`Solver::reset`] and a solver swap drop it, costing only a
-//! few steps of convergence).
+//! The course keeps every spring at most 10 % over its rest length by a sweep after each step
+//! (Provot's correction): it moves the ends of each over-long spring back to `1.1 L`, one
+//! spring after the other, so a later correction can stretch an earlier spring again, and a
+//! falling cloth keeps springs up to about 1.17 L. Here the limit is part of the minimisation
+//! instead: the constraint `|d_s| <= 1.1 L_s` on the step's positions, in the projective-dynamics
+//! form of a projection in the local step. Its term `w_s/2 |d_s - q_s|^2` pulls each spring
+//! vector towards its projection onto the allowed ball `|q| <= 1.1 L_s`, with a scaled
+//! multiplier `mu_s >= 0` per spring (ADMM, Overby et al. 2017) that turns the penalty into the
+//! exact constraint as the iterations converge:
+//!
+//! ```text
+//! z_s  = min(|d_s| + mu_s, 1.1 L_s) d_s / |d_s|          (projection onto the ball)
+//! mu_s <- mu_s + |d_s| - |z_s|                            (>= 0: the tension over w_s)
+//! q_s  = z_s - mu_s d_s / |d_s|
+//! ```
+//!
+//! A slack spring gets `mu_s = 0` and `q_s = d_s`: its term adds nothing to the right-hand side.
+//! A spring already beyond the limit (a state left by the course's sweep, a swap from Verlet,
+//! an edit of `ks`) is pulled back by at most the distance to its projection, weighted against
+//! the mass and the other springs in the same convex solve, so no start, however stretched, can
+//! make a step overshoot: the projection is bounded by construction, where a penalty force or a
+//! free multiplier ascent grows with the violation. `w_s` is [`limit_weight`]: the spring's own
+//! stiffness plus the inertia, which makes the ADMM iteration converge at about the rate of the
+//! springs' own local/global iteration. The multipliers are warm-started from the previous step
+//! (a cache: [`Solver::reset`] and a solver swap drop it, costing a few steps of convergence).
 //!
 //! # Stability
 //!
-//! Every global step is a convex quadratic solve, so the iteration is stable for any step and
-//! stiffness; with few iterations it under-resolves stiff springs, which makes the cloth look
-//! softer and more damped, never unstable. The iteration count (the solver's `iterations`
-//! option, [`DEFAULT_ITERATIONS`] by default) trades accuracy for speed; at convergence the step equals [`ImplicitEuler`]'s.
+//! Every global step is a convex quadratic solve with a positive-definite matrix, and every
+//! local step a projection onto a bounded set, so an iterate can move no point farther than the
+//! targets it is pulled to: the iteration is stable for any step, stiffness and start. With few
+//! iterations it under-resolves stiff springs, which makes the cloth look softer and more
+//! damped, never unstable. At convergence the step equals [`ImplicitEuler`]'s up to the form of
+//! the limit (exact here, a stiff penalty there). Both implicit solvers are meant to run at
+//! one step per frame.
+//!
+//! # Damping
+//!
+//! The course's damping becomes the drag rate [`StepParams::drag_rate`]. At 100 % that rate is
+//! infinite: the step keeps the cloth where it is with no velocity (the limit of the damped
+//! step as the drag grows), and only the collisions act.
 //!
 //! [`ImplicitEuler`]: crate::ImplicitEuler
 
-use cloth_mesh::{ClothMesh, ClothState, Vec3};
+use cloth_mesh::{ClothMesh, ClothState, SpringKind, Vec3};
 use cloth_solver::{
     Collider, MAX_STRETCH, SolveError, Solver, SpatialHash, StepParams, StepReport,
 };
 
 use crate::cholesky::Cholesky;
-use crate::commit::{commit, inertial_prediction};
+use crate::commit::{commit, hold_still, inertial_prediction};
+use crate::memory::{Allocation, try_filled};
 use crate::topology::{NONE, Topology};
+
+/// By default the local/global iterations of a step stop once a global step moves no point
+/// farther than this, metres (0.1 um: a two-hundredth of the 0.1 % stretch of a 2 cm spring).
+pub const FAST_TOLERANCE: f64 = 1e-7;
+
+/// Local/global iterations per step of [`FastImplicit::new`], at most.
+pub const DEFAULT_ITERATIONS: u32 = 10;
+
+/// The weight of the stretch limit's projection term of a spring of stiffness `k`, N/m, for a
+/// step whose mass term per point is `inertia = m (1 + c h) / h^2`: `k + inertia`.
+///
+/// It is also the ADMM penalty. Any positive value converges to the same constrained step; this
+/// one is as stiff as the stiffest thing the constraint competes with, so the multiplier and the
+/// positions converge together (a much smaller weight leaves the multiplier to do all the work,
+/// a much larger one holds every slack spring to its previous iterate).
+#[must_use]
+pub fn limit_weight(k: f64, inertia: f64) -> f64 {
+    k + inertia
+}
 
 /// The fast local/global implicit solver. Owns caches (topology, factored matrix, multiplier
 /// warm start) and scratch memory only.
 #[derive(Debug)]
 pub struct FastImplicit {
-    /// Local/global iterations per step (at least 1).
-    iterations: u32,
     system: Option<System>,
-    /// Tension multipliers of the stretch limit, N, one per spring (warm start).
-    lambda: Vec<f64>,
+    /// Local/global iterations per step, at most (at least 1).
+    iterations: u32,
+    tolerance: f64,
+    /// Scaled multipliers of the stretch limit, m, one per spring (warm start).
+    mu: Vec<f64>,
     rhs: Vec<f64>,
     y: Vec<Vec3>,
     x: Vec<Vec3>,
     hash: SpatialHash,
+}
+
+impl Default for FastImplicit {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 /// What the factored matrix depends on besides the topology, as bit patterns so that any
@@ -75,6 +126,7 @@ pub struct FastImplicit {
 struct MatrixKey {
     inertia: u64,
     stiffness: [u64; 3],
+    limit: bool,
 }
 
 #[derive(Debug)]
@@ -86,30 +138,29 @@ struct System {
     key: Option<MatrixKey>,
 }
 
-/// Local/global iterations per step of [`FastImplicit::new`].
-pub const DEFAULT_ITERATIONS: u32 = 10;
-
-impl Default for FastImplicit {
-    fn default() -> Self {
-        Self::with_iterations(DEFAULT_ITERATIONS)
-    }
-}
+const KINDS: [SpringKind; 3] = [
+    SpringKind::Structural,
+    SpringKind::Shearing,
+    SpringKind::Bending,
+];
 
 impl FastImplicit {
-    /// A new solver with [`DEFAULT_ITERATIONS`] iterations per step; its caches are built on the
-    /// first step.
+    /// A new solver with the default [`FAST_TOLERANCE`] and at most [`DEFAULT_ITERATIONS`]
+    /// iterations per step; its caches are built on the first step.
     #[must_use]
     pub fn new() -> Self {
-        Self::default()
+        Self::with_iterations(DEFAULT_ITERATIONS)
     }
 
-    /// A new solver doing `iterations` local/global iterations per step (0 counts as 1).
+    /// A new solver doing at most `iterations` local/global iterations per step (0 counts as
+    /// 1), stopping earlier on the tolerance.
     #[must_use]
     pub fn with_iterations(iterations: u32) -> Self {
         Self {
-            iterations: iterations.max(1),
             system: None,
-            lambda: Vec::new(),
+            iterations: iterations.max(1),
+            tolerance: FAST_TOLERANCE,
+            mu: Vec::new(),
             rhs: Vec::new(),
             y: Vec::new(),
             x: Vec::new(),
@@ -117,14 +168,49 @@ impl FastImplicit {
         }
     }
 
-    /// Local/global iterations per step.
+    /// Local/global iterations per step, at most.
     #[must_use]
     pub fn iterations(&self) -> u32 {
         self.iterations
     }
 
+    /// Sets the tolerance, metres: a step's iterations stop once a global step moves no point
+    /// farther than this (non-finite or negative values mean [`FAST_TOLERANCE`]; 0 runs every
+    /// iteration).
+    #[must_use]
+    pub fn with_tolerance(mut self, tolerance: f64) -> Self {
+        self.tolerance = if tolerance.is_finite() && tolerance >= 0.0 {
+            tolerance
+        } else {
+            FAST_TOLERANCE
+        };
+        self
+    }
+
+    /// Bytes this solver allocates for `mesh`: the topology, the matrix's pattern and values,
+    /// its Cholesky factor and the factorisation's workspace (from faer's symbolic analysis of
+    /// the pattern, so the fill is counted exactly), and the per-point and per-spring scratch.
+    /// The self-collision hash, the same as Verlet's, is not counted.
+    ///
+    /// The analysis itself takes memory in proportion to the pattern (about a tenth of the
+    /// total); when even that fails, the estimate is `u64::MAX`.
+    #[must_use]
+    pub fn memory_estimate(mesh: &ClothMesh) -> u64 {
+        let topo = Topology::new(mesh);
+        let (col_ptr, row_idx) = topo.scalar_pattern();
+        let Ok(factor) = Cholesky::analyse(&col_ptr, &row_idx, 3) else {
+            return u64::MAX;
+        };
+        let n = topo.free() as u64;
+        let pattern = 8 * 2 * col_ptr.len() as u64 + 8 * row_idx.len() as u64;
+        let values = 8 * row_idx.len() as u64;
+        // rhs (3 per free point), y and x (3 per point), the multipliers (1 per spring).
+        let scratch = 8 * (3 * n + 6 * mesh.len() as u64 + mesh.springs().len() as u64);
+        topo.bytes() + pattern + values + factor.bytes() + scratch
+    }
+
     /// Makes sure the topology, the symbolic factor and the numeric factor describe `mesh` and
-    /// the current parameters; returns the topology and factor.
+    /// the current parameters.
     fn prepare(
         &mut self,
         mesh: &ClothMesh,
@@ -133,11 +219,12 @@ impl FastImplicit {
     ) -> Result<(), SolveError> {
         if !self.system.as_ref().is_some_and(|s| s.topo.matches(mesh)) {
             self.system = None;
-            self.lambda.clear();
+            self.mu = Vec::new();
             let topo = Topology::new(mesh);
             let (col_ptr, row_idx) = topo.scalar_pattern();
             let chol = Cholesky::new(col_ptr.clone(), row_idx, 3).map_err(method_error)?;
-            let values = vec![0.0; chol.nnz()];
+            let values =
+                try_filled(chol.nnz(), 0.0, "the fast-implicit matrix").map_err(alloc_error)?;
             self.system = Some(System {
                 topo,
                 chol,
@@ -146,18 +233,17 @@ impl FastImplicit {
                 key: None,
             });
         }
-        self.lambda.resize(mesh.springs().len(), 0.0);
+        if self.mu.len() != mesh.springs().len() {
+            self.mu = try_filled(mesh.springs().len(), 0.0, "the stretch-limit multipliers")
+                .map_err(alloc_error)?;
+        }
         let Some(sys) = self.system.as_mut() else {
             return Err(method_error("no linear system was built".to_owned()));
         };
         let key = MatrixKey {
             inertia: inertia.to_bits(),
-            stiffness: [
-                cloth_mesh::SpringKind::Structural,
-                cloth_mesh::SpringKind::Shearing,
-                cloth_mesh::SpringKind::Bending,
-            ]
-            .map(|k| params.stiffness(k).to_bits()),
+            stiffness: KINDS.map(|k| params.stiffness(k).to_bits()),
+            limit: params.stretch_limit,
         };
         if sys.key == Some(key) {
             return Ok(());
@@ -170,7 +256,7 @@ impl FastImplicit {
             v[sys.col_ptr[f]] = inertia;
         }
         for (s, &slot) in mesh.springs().iter().zip(&topo.spring_slot) {
-            let k = params.stiffness(s.kind);
+            let k = spring_weight(params, s.kind, inertia);
             if k == 0.0 {
                 continue;
             }
@@ -190,11 +276,35 @@ impl FastImplicit {
     }
 }
 
+/// The total weight a spring of `kind` puts into the matrix: its stiffness, plus the stretch
+/// limit's weight when the limit is on.
+fn spring_weight(params: &StepParams, kind: SpringKind, inertia: f64) -> f64 {
+    let k = params.stiffness(kind);
+    if params.stretch_limit {
+        k + limit_weight(k, inertia)
+    } else {
+        k
+    }
+}
+
+/// The position of `kind` in [`KINDS`].
+fn kind_index(kind: SpringKind) -> usize {
+    match kind {
+        SpringKind::Structural => 0,
+        SpringKind::Shearing => 1,
+        SpringKind::Bending => 2,
+    }
+}
+
 fn method_error(reason: String) -> SolveError {
     SolveError::Method {
         solver: "fast-implicit",
         reason,
     }
+}
+
+fn alloc_error(a: Allocation) -> SolveError {
+    method_error(a.to_string())
 }
 
 impl Solver for FastImplicit {
@@ -203,7 +313,7 @@ impl Solver for FastImplicit {
     }
 
     fn reset(&mut self) {
-        self.lambda.fill(0.0);
+        self.mu.fill(0.0);
     }
 
     fn step(
@@ -218,7 +328,12 @@ impl Solver for FastImplicit {
         let c = params.drag_rate();
         let mass = mesh.point_mass(params.density);
         let inertia = mass * (1.0 + c * h) / (h * h);
+        if !inertia.is_finite() {
+            hold_still(mesh, colliders, params, state, &mut self.hash)?;
+            return Ok(StepReport::default());
+        }
         self.prepare(mesh, params, inertia)?;
+        let max_iterations = self.iterations;
         let Some(sys) = self.system.as_mut() else {
             return Err(method_error("no linear system was built".to_owned()));
         };
@@ -226,8 +341,15 @@ impl Solver for FastImplicit {
         let n = topo.free();
         let weight = params.gravity * mass;
         if !params.stretch_limit {
-            self.lambda.fill(0.0);
+            self.mu.fill(0.0);
         }
+        let limits = KINDS.map(|kind| {
+            if params.stretch_limit {
+                limit_weight(params.stiffness(kind), inertia)
+            } else {
+                0.0
+            }
+        });
 
         inertial_prediction(mesh, state, c * h, &mut self.y);
         self.x.clone_from(&self.y);
@@ -235,8 +357,10 @@ impl Solver for FastImplicit {
         let starts = mesh.start_positions();
 
         let mut residual = 0.0;
-        for _ in 0..self.iterations {
-            // Local step and right-hand side together.
+        let mut iterations = 0;
+        while iterations < max_iterations {
+            iterations += 1;
+            // Local step (and the limit's multiplier update) and right-hand side together.
             for (f, &p) in topo.free_points.iter().enumerate() {
                 let b = self.y[p as usize] * inertia + weight;
                 for axis in 0..3 {
@@ -244,14 +368,14 @@ impl Solver for FastImplicit {
                 }
             }
             for (i, s) in mesh.springs().iter().enumerate() {
-                let k = params.stiffness(s.kind);
-                let lambda = self.lambda[i];
-                if k == 0.0 && lambda == 0.0 {
-                    continue;
-                }
                 let (a, b) = (s.a as usize, s.b as usize);
                 let (fa, fb) = (topo.free_index[a], topo.free_index[b]);
                 if fa == NONE && fb == NONE {
+                    continue;
+                }
+                let k = params.stiffness(s.kind);
+                let w = limits[kind_index(s.kind)];
+                if k == 0.0 && w == 0.0 {
                     continue;
                 }
                 let d = self.x[b] - self.x[a];
@@ -262,19 +386,29 @@ impl Solver for FastImplicit {
                 } else {
                     (starts[b] - starts[a]) / s.rest
                 };
-                // Force on b from the spring's quadratic and the multiplier; a gets the opposite.
-                let pull = u * (k * s.rest - lambda);
+                // Length of the target vector of each term along u: the spring's p (rest
+                // length) and the limit's q.
+                let mut pull = k * s.rest;
+                if w > 0.0 {
+                    let mu = self.mu[i];
+                    let z = (len + mu).min(MAX_STRETCH * s.rest);
+                    let mu = mu + len - z;
+                    self.mu[i] = mu;
+                    pull += w * (z - mu);
+                }
+                let tie = k + w;
+                let pull = u * pull;
                 if fb != NONE {
                     let mut g = pull;
                     if fa == NONE {
-                        g += self.x[a] * k;
+                        g += self.x[a] * tie;
                     }
                     add_rhs(&mut self.rhs, n, fb as usize, &g);
                 }
                 if fa != NONE {
                     let mut g = -pull;
                     if fb == NONE {
-                        g += self.x[b] * k;
+                        g += self.x[b] * tie;
                     }
                     add_rhs(&mut self.rhs, n, fa as usize, &g);
                 }
@@ -289,18 +423,8 @@ impl Solver for FastImplicit {
                 residual = f64::max(residual, (new - self.x[p as usize]).norm());
                 self.x[p as usize] = new;
             }
-            // Dual ascent on the stretch limit.
-            if params.stretch_limit {
-                for (i, s) in mesh.springs().iter().enumerate() {
-                    let (a, b) = (s.a as usize, s.b as usize);
-                    if topo.free_index[a] == NONE && topo.free_index[b] == NONE {
-                        continue;
-                    }
-                    let len = (self.x[b] - self.x[a]).norm();
-                    let rho = 0.25 * (inertia + 2.0 * params.stiffness(s.kind));
-                    let violation = len - MAX_STRETCH * s.rest;
-                    self.lambda[i] = (self.lambda[i] + rho * violation).max(0.0);
-                }
+            if residual.is_nan() || residual <= self.tolerance {
+                break;
             }
         }
 
@@ -314,7 +438,7 @@ impl Solver for FastImplicit {
             &mut self.hash,
         )?;
         Ok(StepReport {
-            iterations: self.iterations,
+            iterations,
             residual,
         })
     }

@@ -21,11 +21,25 @@
 //! spring, `K = E'' u u^T + max(0, T/|d|) (I - u u^T)` on the blocks of its ends (`T` the
 //! tension; the clamp keeps `K` positive semi-definite under compression, see
 //! [`limiter_stiffness`](crate::limiter_stiffness) for `k_lim`). The system
-//! `H dx = -grad Phi` is solved by faer's sparse Cholesky: the fill-reducing ordering and
-//! symbolic factor are computed once per topology (points, springs, pins) and only the numeric
-//! factor per iteration. A backtracking (Armijo) line search on `Phi` makes every iteration a
-//! descent step. Pinned points are not unknowns: their springs add to their neighbours'
-//! diagonal blocks and gradients only.
+//! `H dx = -grad Phi` is solved inexactly: by a conjugate gradient preconditioned by the last
+//! Cholesky factor (faer's sparse `L L^T`), kept across iterations and steps while it still
+//! brings the residual below a tenth of the gradient within [`MAX_PCG_ITERATIONS`] iterations,
+//! and refactored at the current `H` otherwise. The fill-reducing ordering and symbolic factor
+//! are computed once per topology (points, springs, pins). A backtracking (Armijo) line search
+//! on `Phi` makes every iteration a descent step (a preconditioned conjugate gradient started at
+//! zero always returns a descent direction of a positive-definite `H`). Pinned points are not
+//! unknowns: their springs add to their neighbours' diagonal blocks and gradients only.
+//!
+//! # The stretch limit
+//!
+//! The course keeps springs at most 10 % over rest by a sweep after each step (Provot's
+//! correction), which a large step outruns and which leaves a falling cloth's springs up to
+//! about 1.17 L. Here the limit is a clamped penalty inside the energy: the one-sided spring
+//! `k_lim/2 max(0, |d| - 1.1 L)^2`, stiff enough that the whole cloth's weight stretches a
+//! spring at most 0.1 % past the limit ([`limiter_stiffness`](crate::limiter_stiffness)). Its
+//! Hessian stays positive semi-definite, and the line search on `Phi` makes a state that
+//! starts far beyond the limit (a swap from Verlet, an edit of `ks`) a descent from a high
+//! potential: the step pulls the springs back, it cannot overshoot.
 //!
 //! After the solve, self-collision and the collision objects are applied as in
 //! [`cloth_solver::Verlet`], and `last` is set to the start-of-step positions, so that
@@ -46,13 +60,20 @@
 //! no step-size limit like Verlet's `ks < m / (2 dt^2)`. It damps high frequencies numerically
 //! (first-order accurate), on top of the drag `c`, which is why large-step runs look softer.
 //! The stretch limit is part of the energy, so it holds after a large step where a single
-//! Provot sweep could not undo a step's worth of stretch.
+//! Provot sweep could not undo a step's worth of stretch. The solver is meant to run at one
+//! step per frame.
+//!
+//! # Damping
+//!
+//! At 100 % damping the drag rate is infinite: the step keeps the cloth where it is with no
+//! velocity (the limit of the damped step as the drag grows), and only the collisions act.
 
 use cloth_mesh::{ClothMesh, ClothState, Vec3};
 use cloth_solver::{Collider, SolveError, Solver, SpatialHash, StepParams, StepReport};
 
 use crate::cholesky::Cholesky;
-use crate::commit::{commit, inertial_prediction};
+use crate::commit::{commit, hold_still, inertial_prediction};
+use crate::memory::{Allocation, check_available, try_filled};
 use crate::spring_energy::{SpringLaw, limiter_stiffness};
 use crate::topology::{NONE, Topology};
 
@@ -72,6 +93,17 @@ const ARMIJO: f64 = 1e-4;
 /// Halvings of the line search before giving up on an iteration (step scaled by 2^-40).
 const MAX_HALVINGS: u32 = 40;
 
+/// At most this many conjugate-gradient iterations with the last factor as preconditioner
+/// before the matrix is refactored: a preconditioner that needs more describes a matrix too far
+/// from the current one, and a fresh factor is then cheaper than more iterations.
+pub const MAX_PCG_ITERATIONS: u32 = 6;
+
+/// The inexact Newton step is accepted once the linear residual is below this fraction of the
+/// gradient (a constant forcing term: Newton then converges linearly at about this rate, fast
+/// enough for the step tolerance within a few iterations, and the line search keeps every
+/// iteration a descent).
+const FORCING: f64 = 0.1;
+
 /// The implicit (backward Euler) solver: Newton's method with a line search on the incremental
 /// potential, on faer's sparse Cholesky. See the module documentation for the method.
 ///
@@ -86,6 +118,9 @@ pub struct ImplicitEuler {
     values: Vec<f64>,
     /// The negated gradient, then the Newton step (3 per free point).
     rhs: Vec<f64>,
+    /// The conjugate gradient's residual, preconditioned residual and direction, and the
+    /// matrix times the direction (3 per free point each).
+    cg: [Vec<f64>; 4],
     y: Vec<Vec3>,
     x: Vec<Vec3>,
     trial: Vec<Vec3>,
@@ -97,8 +132,12 @@ pub struct ImplicitEuler {
 struct System {
     topo: Topology,
     chol: Cholesky,
-    /// Column starts of the block pattern (a copy of the factor's, borrowed while assembling).
+    /// The block pattern (a copy of the factor's, borrowed while assembling and multiplying).
     col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    /// Whether the factor holds a matrix of the current parameters' kind: any factor of a
+    /// positive-definite matrix is a valid preconditioner, this only says one exists.
+    factored: bool,
 }
 
 /// Everything one Newton step needs besides positions.
@@ -135,11 +174,49 @@ impl ImplicitEuler {
             grad: Vec::new(),
             values: Vec::new(),
             rhs: Vec::new(),
+            cg: Default::default(),
             y: Vec::new(),
             x: Vec::new(),
             trial: Vec::new(),
             hash: SpatialHash::default(),
         }
+    }
+
+    /// Bytes this solver allocates for `mesh`: the topology, the block matrix's pattern and
+    /// values, its Cholesky factor and workspace, and the per-point scratch. The factor's size
+    /// comes from faer's symbolic analysis of the scalar pattern (one unknown per point), whose
+    /// fill each 3 x 3 block repeats nine times over; the self-collision hash, the same as
+    /// Verlet's, is not counted.
+    ///
+    /// The analysis takes memory in proportion to the scalar pattern (a small part of the
+    /// total); when even that fails, the estimate is `u64::MAX`.
+    #[must_use]
+    pub fn memory_estimate(mesh: &ClothMesh) -> u64 {
+        let topo = Topology::new(mesh);
+        let (col_ptr, row_idx) = topo.scalar_pattern();
+        let Ok(scalar) = Cholesky::analyse(&col_ptr, &row_idx, 1) else {
+            return u64::MAX;
+        };
+        Self::estimate(&topo, mesh, scalar.factor_len() as u64)
+    }
+
+    /// [`ImplicitEuler::memory_estimate`] from the topology and the scalar factor's length.
+    fn estimate(topo: &Topology, mesh: &ClothMesh, scalar_factor: u64) -> u64 {
+        let n = topo.free() as u64;
+        let nbrs = topo.neighbours.len() as u64;
+        // Block pattern: 6 entries per diagonal block's lower triangle, 9 per neighbour block.
+        let entries = 6 * n + 9 * nbrs;
+        let pattern = 8 * (2 * (3 * n + 1) + 2 * entries);
+        let values = 8 * entries;
+        // Each scalar entry of L becomes a 3 x 3 block, less the upper triangles of the
+        // diagonal blocks; the workspace is of the order of the largest supernode, bounded by
+        // the factor itself.
+        let factor = 8 * (9 * scalar_factor).saturating_sub(3 * n);
+        let workspace = factor / 4;
+        // grad, rhs and the four conjugate-gradient vectors (3 per free point); y, x and trial
+        // (3 per point).
+        let scratch = 8 * (6 * 3 * n + 9 * mesh.len() as u64);
+        topo.bytes() + pattern + values + factor + workspace + scratch
     }
 
     /// Makes sure the topology and symbolic factor describe `mesh`.
@@ -149,15 +226,33 @@ impl ImplicitEuler {
         }
         self.system = None;
         let topo = Topology::new(mesh);
+        // Check the whole size before the block pattern, itself large, is built.
+        let (scalar_ptr, scalar_idx) = topo.scalar_pattern();
+        let scalar = Cholesky::analyse(&scalar_ptr, &scalar_idx, 1).map_err(method_error)?;
+        drop((scalar_ptr, scalar_idx));
+        check_available(
+            Self::estimate(&topo, mesh, scalar.factor_len() as u64),
+            "the implicit solver's matrix and Cholesky factor",
+        )
+        .map_err(alloc_error)?;
+        drop(scalar);
         let (col_ptr, row_idx) = topo.block_pattern();
-        let chol = Cholesky::new(col_ptr.clone(), row_idx, 1).map_err(method_error)?;
+        let chol = Cholesky::new(col_ptr.clone(), row_idx.clone(), 1).map_err(method_error)?;
+        self.values =
+            try_filled(chol.nnz(), 0.0, "the implicit solver's matrix").map_err(alloc_error)?;
         self.system = Some(System {
             topo,
             chol,
             col_ptr,
+            row_idx,
+            factored: false,
         });
         Ok(())
     }
+}
+
+fn alloc_error(a: Allocation) -> SolveError {
+    method_error(a.to_string())
 }
 
 fn method_error(reason: String) -> SolveError {
@@ -283,6 +378,85 @@ impl Problem<'_> {
     }
 }
 
+/// A symmetric matrix stored as its lower triangle in compressed columns.
+struct Matrix<'a> {
+    col_ptr: &'a [usize],
+    row_idx: &'a [usize],
+    values: &'a [f64],
+}
+
+impl Matrix<'_> {
+    /// `out = A v`.
+    fn mul(&self, v: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
+        for j in 0..self.col_ptr.len() - 1 {
+            let vj = v[j];
+            let mut acc = 0.0;
+            for e in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let (r, a) = (self.row_idx[e], self.values[e]);
+                out[r] += a * vj;
+                if r != j {
+                    acc += a * v[r];
+                }
+            }
+            out[j] += acc;
+        }
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Solves `A dx = -grad` by the conjugate gradient preconditioned by `factor` (the Cholesky
+/// factor of an earlier `A`), writing `dx`; true when the residual fell below
+/// [`FORCING`]` |grad|` within `max_iterations`.
+///
+/// # Errors
+/// A solve with the factor failed.
+fn pcg(
+    a: &Matrix<'_>,
+    factor: &mut Cholesky,
+    grad: &[f64],
+    dx: &mut [f64],
+    [r, z, p, ap]: &mut [Vec<f64>; 4],
+    max_iterations: u32,
+) -> Result<bool, SolveError> {
+    let target = FORCING * dot(grad, grad).sqrt();
+    dx.fill(0.0);
+    for (r, g) in r.iter_mut().zip(grad) {
+        *r = -g;
+    }
+    z.copy_from_slice(r);
+    factor.solve_in_place(z).map_err(method_error)?;
+    p.copy_from_slice(z);
+    let mut rz = dot(r, z);
+    for _ in 0..max_iterations {
+        a.mul(p, ap);
+        let pap = dot(p, ap);
+        if !(pap > 0.0 && rz.is_finite()) {
+            return Ok(false);
+        }
+        let alpha = rz / pap;
+        for ((x, r), (p, ap)) in dx.iter_mut().zip(r.iter_mut()).zip(p.iter().zip(ap.iter())) {
+            *x += alpha * p;
+            *r -= alpha * ap;
+        }
+        if dot(r, r).sqrt() <= target {
+            return Ok(true);
+        }
+        z.copy_from_slice(r);
+        factor.solve_in_place(z).map_err(method_error)?;
+        let rz_next = dot(r, z);
+        let beta = rz_next / rz;
+        rz = rz_next;
+        for (p, z) in p.iter_mut().zip(z.iter()) {
+            *p = z + beta * *p;
+        }
+    }
+    Ok(false)
+}
+
 fn add3(v: &mut [f64], f: usize, g: &Vec3) {
     v[3 * f] += g.x;
     v[3 * f + 1] += g.y;
@@ -308,6 +482,14 @@ impl Solver for ImplicitEuler {
         "implicit"
     }
 
+    /// Drops the factor kept as the conjugate gradient's preconditioner, so a run after a reset
+    /// takes the same path, bit for bit, as a run with a new solver.
+    fn reset(&mut self) {
+        if let Some(sys) = self.system.as_mut() {
+            sys.factored = false;
+        }
+    }
+
     fn step(
         &mut self,
         mesh: &ClothMesh,
@@ -316,18 +498,25 @@ impl Solver for ImplicitEuler {
         state: &mut ClothState,
     ) -> Result<StepReport, SolveError> {
         params.validate()?;
+        let h = params.dt();
+        let c = params.drag_rate();
+        let mass = mesh.point_mass(params.density);
+        let inertia = mass * (1.0 + c * h) / (h * h);
+        if !inertia.is_finite() {
+            hold_still(mesh, colliders, params, state, &mut self.hash)?;
+            return Ok(StepReport::default());
+        }
         self.prepare(mesh)?;
         let Some(System {
             topo,
             chol,
             col_ptr,
+            row_idx,
+            factored,
         }) = self.system.as_mut()
         else {
             return Err(method_error("no linear system was built".to_owned()));
         };
-        let h = params.dt();
-        let c = params.drag_rate();
-        let mass = mesh.point_mass(params.density);
         let k_lim = if params.stretch_limit {
             limiter_stiffness(mesh, params)
         } else {
@@ -345,7 +534,7 @@ impl Solver for ImplicitEuler {
                     k_lim,
                 })
                 .collect(),
-            inertia: mass * (1.0 + c * h) / (h * h),
+            inertia,
             weight: params.gravity * mass,
         };
 
@@ -354,7 +543,9 @@ impl Solver for ImplicitEuler {
         let n = 3 * topo.free();
         self.grad.resize(n, 0.0);
         self.rhs.resize(n, 0.0);
-        self.values.resize(chol.nnz(), 0.0);
+        for v in &mut self.cg {
+            v.resize(n, 0.0);
+        }
 
         let mut iterations = 0;
         let mut residual = 0.0;
@@ -367,11 +558,29 @@ impl Solver for ImplicitEuler {
                 &mut self.grad,
                 Some(&mut self.values),
             );
-            chol.factorize(&self.values).map_err(method_error)?;
-            for (r, g) in self.rhs.iter_mut().zip(&self.grad) {
-                *r = -g;
+            let matrix = Matrix {
+                col_ptr,
+                row_idx,
+                values: &self.values,
+            };
+            let solved = *factored
+                && pcg(
+                    &matrix,
+                    chol,
+                    &self.grad,
+                    &mut self.rhs,
+                    &mut self.cg,
+                    MAX_PCG_ITERATIONS,
+                )?;
+            if !solved {
+                *factored = false;
+                chol.factorize(&self.values).map_err(method_error)?;
+                *factored = true;
+                for (r, g) in self.rhs.iter_mut().zip(&self.grad) {
+                    *r = -g;
+                }
+                chol.solve_in_place(&mut self.rhs).map_err(method_error)?;
             }
-            chol.solve_in_place(&mut self.rhs).map_err(method_error)?;
             let dx = &self.rhs;
             residual = max_point_norm(dx);
             if !residual.is_finite() {

@@ -93,6 +93,16 @@ impl Topology {
             && self.pinned == mesh.pinned()
     }
 
+    /// Bytes this topology holds.
+    pub(crate) fn bytes(&self) -> u64 {
+        (self.pinned.len()
+            + 4 * (self.free_index.len()
+                + self.free_points.len()
+                + self.neighbours.len()
+                + self.spring_slot.len())
+            + 8 * self.nbr_ptr.len()) as u64
+    }
+
     /// Number of free points.
     pub(crate) fn free(&self) -> usize {
         self.free_points.len()

@@ -310,3 +310,78 @@ fn fast_implicit_is_stable_at_100x100_and_ks_1e5_where_verlet_at_30_substeps_is_
     eprintln!("fast implicit last-frame move {fast:.3e} m");
     assert!(fast < 1e-3, "still moving {fast} m/frame");
 }
+
+#[test]
+fn without_the_limit_fast_implicit_holds_verlets_equilibrium() {
+    // At a fixed point of the local/global iteration the global step returns its own input,
+    // which makes the gradient of E zero: fast-implicit's rest states are the spring energy's
+    // equilibria, Verlet's too. Released at rest from Verlet's equilibrium (itself within
+    // ~3e-9 m of the exact one, see verlet_rest), it must stay there: a start 1e-6 m off its
+    // own fixed point along any mode faster than 1 rad/s would move by about that much in the
+    // 2 s run (the drag and the iteration both pull it home), so a drift under 1e-6 m bounds
+    // the distance between the two rest states by the 1e-6 m.
+    let mesh = pinned4(50);
+    for ks in [1e5, 5000.0] {
+        let params = static_params(ks, false);
+        let (_, v) = verlet_rest(&mesh, &params);
+        let fast_params = StepParams {
+            steps_per_frame: 1,
+            ..params
+        };
+        let mut s = ClothState {
+            positions: v.positions.clone(),
+            last: v.positions.clone(),
+        };
+        let mut fast = FastImplicit::with_iterations(50);
+        let mut drift: f64 = 0.0;
+        for _ in 0..180 {
+            advance_frame(&mut fast, &mesh, &[], &fast_params, &mut s).expect("finite");
+            drift = drift.max(max_distance(&s.positions, &v.positions));
+        }
+        eprintln!("ks={ks}: fast-implicit's drift from Verlet's rest state {drift:.3e} m");
+        assert!(drift < 1e-6, "ks={ks}: drift {drift:e} m");
+    }
+}
+
+#[test]
+fn with_the_limit_the_pinned4_centre_settles_within_5_mm_of_verlets() {
+    // The course's pinned4 at its defaults hangs on its stretch limit: most springs from the
+    // corners bind. The forms of the limit hold a binding spring at different lengths:
+    // fast-implicit's exact constraint at 1.1 rest once its iterations converge, the Newton
+    // solver's penalty at most 0.1 % of a spring over it (2e-5 m), and Verlet's sweep, which
+    // corrects one spring after another so that later corrections stretch earlier springs
+    // again, a few tenths of a percent of rest over it at rest (its largest ratio is printed).
+    // The centre hangs from a chain of about 35 binding springs from each corner (the
+    // 49-spring diagonal less the slack middle), so 0.5 % of a 2 cm spring on each moves it by
+    // 35 x 1e-4 = 3.5 mm: the two implicit solvers agree with each other to a fraction of a
+    // millimetre and with Verlet to within the 5 mm; a limit that gave way (or a
+    // solver that had not settled) moves the centre by centimetres.
+    let mesh = pinned4(50);
+    let params = StepParams {
+        self_collision: false,
+        ..StepParams::default()
+    };
+    let (_, v) = verlet_rest(&mesh, &params);
+    eprintln!(
+        "Verlet's largest stretch ratio at rest {:.5}",
+        max_stretch_ratio(&mesh, &v)
+    );
+    let centre = mesh.index(25, 25);
+    let one_step = StepParams {
+        steps_per_frame: 1,
+        ..params
+    };
+    let cases: [(&str, Box<dyn Solver>); 2] = [
+        ("fast-implicit", Box::new(FastImplicit::new())),
+        ("implicit", Box::new(ImplicitEuler::new())),
+    ];
+    for (name, mut solver) in cases {
+        let mut s = ClothState::new(&mesh);
+        for _ in 0..450 {
+            advance_frame(solver.as_mut(), &mesh, &[], &one_step, &mut s).expect("finite");
+        }
+        let d = (s.positions[centre] - v.positions[centre]).norm();
+        eprintln!("{name}: centre {d:.3e} m from Verlet's");
+        assert!(d < 5e-3, "{name}: centre {d} m from Verlet's");
+    }
+}

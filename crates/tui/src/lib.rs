@@ -29,6 +29,7 @@ mod render;
 mod scenes;
 mod simulate;
 mod solvers;
+mod state_file;
 mod steal;
 
 use std::ffi::OsString;

@@ -16,6 +16,7 @@ use cloth_solver::Registry;
 
 use crate::output::Stdout;
 use crate::progress::{Progress, When};
+use crate::state_file::StateFile;
 use crate::{headless, solvers};
 
 /// Columns between the panels of `--view all`.
@@ -108,6 +109,11 @@ pub struct Args {
     #[arg(long, value_enum, value_name = "WHEN", default_value_t = When::Auto,
           num_args = 0..=1, default_missing_value = "always")]
     progress: When,
+    /// Start from a state that `simulate` wrote (its positions and last positions, so the
+    /// cloth keeps its velocity) instead of the scene's flat start; its grid and pins must be
+    /// the scene's. Frame 0 is that state.
+    #[arg(long, value_name = "STATE.json")]
+    from: Option<std::path::PathBuf>,
 }
 
 /// Whether frame `f` (1-based; 0 is the start) of `frames` is printed.
@@ -136,6 +142,10 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     };
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
     let choice = solvers::choose(registry, &scene, args.solver.as_deref())?;
+    let start = match &args.from {
+        Some(path) => StateFile::read(path, &scene.mesh, scene.params.dt())?.1,
+        None => ClothState::new(&scene.mesh),
+    };
     let views = args.view.views();
     let options = RenderOptions {
         mode: args.mode,
@@ -148,7 +158,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     // an animation, the extent starts as where the scene can take the cloth (see
     // `predicted_extent`), so the views keep one scale, and grows should the cloth go further.
     let mut extent = if printed_count(args.frames, args.every) > 1 {
-        Some(predicted_extent(&scene, args.frames)?)
+        Some(predicted_extent(&scene, &start, args.frames)?)
     } else {
         None
     };
@@ -157,7 +167,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let mut text = String::new();
     let mut out = Stdout::new();
     let mut first = true;
-    simulate(&scene, &choice, args, |_, state| {
+    simulate(&scene, &choice, args, &start, |_, state| {
         let now = Bounds::of_scene(&state.positions, &scene.colliders)?;
         let fitted = extent.map_or(now, |e| e.union(&now));
         if extent.is_some() {
@@ -196,8 +206,11 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
 /// collider is there to catch it, at most 1.1 times its own diagonal. A floor facing up stops
 /// the fall. The cloth rarely fills the whole box, and when it leaves it (a swing past the
 /// vertical) the box grows from that frame on.
-fn predicted_extent(scene: &cloth_scene::Scene, frames: u64) -> anyhow::Result<Bounds> {
-    let start = ClothState::new(&scene.mesh);
+fn predicted_extent(
+    scene: &cloth_scene::Scene,
+    start: &ClothState,
+    frames: u64,
+) -> anyhow::Result<Bounds> {
     let solid = Bounds::of_solids(&start.positions, &scene.colliders)?;
     let cloth = Bounds::of_points(&start.positions)?.unwrap_or(solid);
     let g = scene.params.gravity;
@@ -252,16 +265,17 @@ fn predicted_extent(scene: &cloth_scene::Scene, frames: u64) -> anyhow::Result<B
     Ok(predicted.with_floors(&predicted, &scene.colliders))
 }
 
-/// Simulates `args.frames` frames, calling `each` with the frame number and state of every
-/// printed frame.
+/// Simulates `args.frames` frames from `start`, calling `each` with the frame number and state
+/// of every printed frame.
 fn simulate(
     scene: &cloth_scene::Scene,
     choice: &solvers::Choice,
     args: &Args,
+    start: &ClothState,
     mut each: impl FnMut(u64, &ClothState) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
     let mut solver = choice.build(&scene.mesh)?;
-    let mut state = ClothState::new(&scene.mesh);
+    let mut state = start.clone();
     let mut progress = Progress::new(
         args.progress,
         &scene.origin,

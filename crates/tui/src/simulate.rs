@@ -6,9 +6,9 @@ use std::path::PathBuf;
 
 use cloth_mesh::{ClothMesh, ClothState, vertex_normals};
 use cloth_solver::Registry;
-use serde::Serialize;
 
 use crate::progress::{Progress, When};
+use crate::state_file::StateFile;
 use crate::{headless, output, solvers};
 
 /// Arguments of `clothsim simulate`.
@@ -27,25 +27,20 @@ pub struct Args {
     /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).
     #[arg(long)]
     solver: Option<String>,
-    /// Where to write the final state: a `.json` file (positions) or a `.obj` file (mesh).
-    /// Without it, JSON goes to stdout.
+    /// Where to write the final state: a `.json` file (positions and last positions) or a
+    /// `.obj` file (mesh). Without it, JSON goes to stdout.
     #[arg(long, value_name = "FILE", value_hint = clap::ValueHint::FilePath)]
     out: Option<PathBuf>,
+    /// Start from a state that `simulate` wrote (its positions and last positions, so the
+    /// cloth keeps its velocity) instead of the scene's flat start; its grid and pins must be
+    /// the scene's. The frames and time written continue from the state's.
+    #[arg(long, value_name = "STATE.json", value_hint = clap::ValueHint::FilePath)]
+    from: Option<PathBuf>,
     /// Progress on stderr: auto (a bar when stderr is a terminal), always (also a line every
     /// 10 s when it is not: logs, CI), never. `--progress` alone means always.
     #[arg(long, value_enum, value_name = "WHEN", default_value_t = When::Auto,
           num_args = 0..=1, default_missing_value = "always")]
     progress: When,
-}
-
-/// The JSON written by `simulate`.
-#[derive(Serialize)]
-struct FinalState {
-    num_width_points: usize,
-    num_height_points: usize,
-    frames: u64,
-    time: f64,
-    positions: Vec<[f64; 3]>,
 }
 
 enum Format {
@@ -82,8 +77,14 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let choice = solvers::choose(registry, &scene, args.solver.as_deref())?;
     let mut solver = choice.build(&scene.mesh)?;
     let explicit = choice.entry.is_explicit();
-    let mut state = ClothState::new(&scene.mesh);
     let params = scene.params;
+    let (start_frames, start_time, mut state) = match &args.from {
+        Some(path) => {
+            let (file, state) = StateFile::read(path, &scene.mesh, params.dt())?;
+            (file.frames, file.time, state)
+        }
+        None => (0, 0.0, ClothState::new(&scene.mesh)),
+    };
 
     // The bar would share the terminal with JSON on standard output only when both are the
     // terminal and there is no --out; it is cleared at the end, before the JSON is written.
@@ -113,13 +114,13 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
 
     let bytes = match format {
         Format::Json => {
-            let fs = FinalState {
-                num_width_points: scene.mesh.nw(),
-                num_height_points: scene.mesh.nh(),
-                frames: args.frames,
-                time: args.frames as f64 / params.frames_per_sec,
-                positions: state.positions.iter().map(|p| [p.x, p.y, p.z]).collect(),
-            };
+            let fs = StateFile::new(
+                &scene.mesh,
+                &state,
+                start_frames.saturating_add(args.frames),
+                start_time + args.frames as f64 / params.frames_per_sec,
+                params.dt(),
+            );
             let mut s = serde_json::to_string(&fs)?;
             s.push('\n');
             s.into_bytes()

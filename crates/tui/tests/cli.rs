@@ -584,3 +584,66 @@ fn man_prints_the_page_and_writes_one_per_command_into_a_folder() {
         assert!(text.starts_with(".ie") && text.contains(".TH"), "{page}");
     }
 }
+
+#[test]
+fn simulate_from_a_written_state_continues_the_run_bit_for_bit() {
+    // The state carries positions and last positions at full precision, so 3 frames, then 2
+    // more from the file, are the 5-frame run exactly (same solver, same step: no rescaling).
+    let dir = tempfile::tempdir().unwrap();
+    let first = dir.path().join("three.json");
+    let o = clothsim(&[
+        "simulate",
+        "pinned4",
+        "--frames",
+        "3",
+        "--out",
+        first.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = clothsim(&[
+        "simulate",
+        "pinned4",
+        "--frames",
+        "2",
+        "--from",
+        first.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let continued: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let o = clothsim(&["simulate", "pinned4", "--frames", "5"]);
+    let straight: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(continued["frames"], 5);
+    assert_eq!(continued["positions"], straight["positions"]);
+    assert_eq!(continued["last_positions"], straight["last_positions"]);
+}
+
+#[test]
+fn a_state_of_another_grid_is_refused_naming_both_grids() {
+    let dir = tempfile::tempdir().unwrap();
+    let state = dir.path().join("hammock.json");
+    let o = clothsim(&[
+        "simulate",
+        "hammock",
+        "--frames",
+        "0",
+        "--out",
+        state.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for command in ["simulate", "render"] {
+        let o = clothsim(&[
+            command,
+            "pinned4",
+            "--frames",
+            "1",
+            "--from",
+            state.to_str().unwrap(),
+        ]);
+        assert!(!o.status.success());
+        let e = stderr(&o);
+        assert!(
+            e.contains("64 x 32") && e.contains("50 x 50"),
+            "{command}: {e}"
+        );
+    }
+}

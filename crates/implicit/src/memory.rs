@@ -1,0 +1,99 @@
+//! Fallible allocation of the implicit solvers' large buffers, so that a cloth too large for the
+//! machine is an error value instead of an aborted process.
+
+use std::fmt;
+
+/// A buffer that could not be allocated: what it was for and how large it was.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Allocation {
+    /// What the buffer holds.
+    pub(crate) what: &'static str,
+    /// Its size, bytes.
+    pub(crate) bytes: u64,
+}
+
+impl fmt::Display for Allocation {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "cannot allocate {} for {}: the cloth is too large for this machine's memory \
+             (use a smaller grid, or the verlet solver, which needs no matrix)",
+            human_bytes(self.bytes),
+            self.what
+        )
+    }
+}
+
+/// `bytes` as a short human-readable size.
+pub(crate) fn human_bytes(bytes: u64) -> String {
+    const UNITS: [&str; 5] = ["bytes", "KiB", "MiB", "GiB", "TiB"];
+    let mut value = bytes as f64;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < UNITS.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{bytes} bytes")
+    } else {
+        format!("{value:.1} {}", UNITS[unit])
+    }
+}
+
+/// A vector of `len` copies of `value`, or the [`Allocation`] that failed.
+pub(crate) fn try_filled<T: Clone>(
+    len: usize,
+    value: T,
+    what: &'static str,
+) -> Result<Vec<T>, Allocation> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len).map_err(|_| Allocation {
+        what,
+        bytes: (len as u64).saturating_mul(std::mem::size_of::<T>() as u64),
+    })?;
+    v.resize(len, value);
+    Ok(v)
+}
+
+/// Refuses to go on when `bytes` exceed the memory the operating system says is available
+/// (Linux's `MemAvailable`; elsewhere only the allocations themselves can fail). An allocation
+/// the system grants but cannot back would otherwise end the process later, when it is touched.
+pub(crate) fn check_available(bytes: u64, what: &'static str) -> Result<(), Allocation> {
+    match available_memory() {
+        Some(available) if bytes > available => Err(Allocation { what, bytes }),
+        _ => Ok(()),
+    }
+}
+
+/// `MemAvailable` from `/proc/meminfo`, bytes, where there is one.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line
+        .trim_start_matches("MemAvailable:")
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    kib.checked_mul(1024)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_impossible_allocation_is_an_error_naming_its_size() {
+        let e = try_filled(usize::MAX / 8, 0.0_f64, "a test buffer").unwrap_err();
+        assert_eq!(e.what, "a test buffer");
+        assert!(e.to_string().contains("a test buffer"), "{e}");
+        assert!(check_available(u64::MAX, "everything").is_err() || available_memory().is_none());
+    }
+
+    #[test]
+    fn sizes_read_as_binary_units() {
+        assert_eq!(human_bytes(512), "512 bytes");
+        assert_eq!(human_bytes(11_488_248_432), "10.7 GiB");
+    }
+}
