@@ -7,6 +7,7 @@
 mod app;
 mod bench;
 mod cli;
+mod guard;
 mod output;
 mod render;
 mod scenes;
