@@ -319,7 +319,9 @@ mod tests {
         // Ten times faster every frame from the start.
         let caught = (1..=10).find_map(|f| {
             let t = f64::from(f) / 90.0;
-            g.check(at(t, 0.01 * 10f64.powi(f)), 9.8, true).err().map(|d| (f, d))
+            g.check(at(t, 0.01 * 10f64.powi(f)), 9.8, true)
+                .err()
+                .map(|d| (f, d))
         });
         let (f, d) = caught.expect("caught");
         assert!(matches!(d, Divergence::Runaway { .. }), "{d:?}");

@@ -97,7 +97,12 @@ impl Session {
     pub fn resume(&mut self) -> io::Result<()> {
         enter(self.mouse)?;
         self.entered = true;
-        self.terminal.clear()
+        // NOTE: `Terminal::clear` asks the terminal where its cursor is, and the answer would
+        // be read by the input thread instead; a resize to the current size clears the screen
+        // and forgets what was drawn without asking.
+        let size = self.terminal.size()?;
+        self.terminal
+            .resize(ratatui::layout::Rect::new(0, 0, size.width, size.height))
     }
 
     /// Captures the mouse or frees it.
