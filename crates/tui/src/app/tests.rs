@@ -706,3 +706,87 @@ fn without_colour_nothing_on_screen_is_coloured() {
     app.color_allowed = true;
     assert!(draw(&mut app));
 }
+
+#[test]
+fn snapshot_the_value_prompt_with_its_value_selected() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Enter);
+    insta::assert_snapshot!("value_prompt_selected_100x30", screen(&mut app, 100, 30));
+}
+
+#[test]
+fn snapshot_the_unsaved_edits_question() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Right);
+    press(&mut app, KeyCode::Char('q'));
+    insta::assert_snapshot!("unsaved_edits_100x30", screen(&mut app, 100, 30));
+}
+
+#[test]
+fn opening_a_cloth_of_more_than_250000_points_asks_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut file: serde_json::Value =
+        serde_json::from_str(cloth_scene::bundled("pinned4").unwrap().json).unwrap();
+    file["cloth"]["num_width_points"] = 600.into();
+    file["cloth"]["num_height_points"] = 600.into();
+    std::fs::write(dir.path().join("big.json"), file.to_string()).unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    press(&mut app, KeyCode::Char('o'));
+    pick(&mut app, cloth_scene::BUNDLED.len());
+    press(&mut app, KeyCode::Enter);
+    assert_eq!(app.overlay, Overlay::ConfirmBig(360_000));
+    // The snapshot names the file without its temporary folder, so it is the same every run.
+    let waiting = app.big.as_mut().unwrap();
+    let origin = std::mem::replace(&mut waiting.origin, "big.json".to_owned());
+    insta::assert_snapshot!("big_cloth_100x30", screen(&mut app, 100, 30));
+    app.big.as_mut().unwrap().origin = origin;
+    press(&mut app, KeyCode::Char('n'));
+    assert_eq!(app.sim.scene.origin, "pinned4", "n keeps the open scene");
+    press(&mut app, KeyCode::Char('o'));
+    pick(&mut app, cloth_scene::BUNDLED.len());
+    press(&mut app, KeyCode::Enter);
+    press(&mut app, KeyCode::Char('y'));
+    assert_eq!(app.sim.scene.mesh.len(), 360_000);
+    // Drawn through a coarser grid of at most 256 points a side.
+    let d = app.display.as_ref().expect("a display grid");
+    assert_eq!((d.mesh.nw(), d.mesh.nh()), (256, 256));
+}
+
+#[test]
+fn a_16_colour_terminal_gets_16_colours_and_dumb_terminals_none() {
+    let env = |term: &str| cloth_render::ColorEnv {
+        term: Some(term.to_owned()),
+        ..cloth_render::ColorEnv::default()
+    };
+    let args = Args {
+        paused: true,
+        ..Args::default()
+    };
+    let app = build_in(&args, true, &env("xterm")).unwrap();
+    assert!(app.color_allowed);
+    assert_eq!(app.depth, cloth_render::ColorDepth::Ansi16);
+    let app = build_in(&args, true, &env("xterm-256color")).unwrap();
+    assert_eq!(app.depth, cloth_render::ColorDepth::Ansi256);
+    let always = Args {
+        color: cloth_render::ColorChoice::Always,
+        ..args.clone()
+    };
+    let app = build_in(&always, true, &env("xterm")).unwrap();
+    assert!(app.color, "--color always colours the cloth too");
+}
+
+#[test]
+fn snapshot_half_blocks_without_colour_keep_the_shading() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Char('m'));
+    assert_eq!(app.mode, cloth_render::Mode::Half);
+    let s = screen(&mut app, 100, 30);
+    // More than one shade block: shading, not a silhouette.
+    let kinds = ['░', '▒', '▓', '█']
+        .iter()
+        .filter(|c| s.contains(**c))
+        .count();
+    assert!(kinds >= 2, "{s}");
+    insta::assert_snapshot!("half_blocks_100x30", s);
+}

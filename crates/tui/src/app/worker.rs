@@ -123,6 +123,7 @@ impl Worker {
                     commands: rx,
                     shared: inner,
                     notify,
+                    spare: Vec::new(),
                 }
                 .run();
             })?;
@@ -200,6 +201,8 @@ struct Stepper {
     commands: Receiver<Command>,
     shared: Arc<Shared>,
     notify: Box<dyn Fn() + Send>,
+    /// The buffer the next snapshot's positions are copied into.
+    spare: Vec<cloth_solver::Vec3>,
 }
 
 /// Rates over a window of wall time.
@@ -323,13 +326,16 @@ impl Stepper {
 
     fn publish(&mut self, errors: &mut Vec<String>, rates: Rates, applied: u64) {
         self.shared.wanted.store(false, Ordering::Release);
+        // NOTE: the copy is made before taking the lock, so the UI never waits on a big
+        // cloth's copy; the buffers then change hands.
+        self.spare.clone_from(&self.sim.state.positions);
         {
             let mut p = self
                 .shared
                 .published
                 .lock()
                 .unwrap_or_else(PoisonError::into_inner);
-            p.positions.clone_from(&self.sim.state.positions);
+            std::mem::swap(&mut p.positions, &mut self.spare);
             p.time = self.sim.time;
             p.steps = self.sim.steps;
             p.frames = self.sim.frames;

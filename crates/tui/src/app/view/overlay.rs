@@ -223,9 +223,15 @@ pub fn prompt(app: &App, f: &mut Frame, area: Rect, p: &Prompt, theme: &Theme) {
     let at: String = chars.get(p.cursor).map_or(" ".to_owned(), char::to_string);
     let after: String = chars.iter().skip(p.cursor + 1).collect();
     text.push(Span::styled("> ", theme.key));
-    text.push(Span::styled(before, theme.text));
-    text.push(Span::styled(at, theme.selected));
-    text.push(Span::styled(after, theme.text));
+    if p.selected {
+        // The pre-filled value, all selected: typing replaces it.
+        text.push(Span::styled(p.text.clone(), theme.selected));
+        text.push(Span::styled(" ", theme.text));
+    } else {
+        text.push(Span::styled(before, theme.text));
+        text.push(Span::styled(at, theme.selected));
+        text.push(Span::styled(after, theme.text));
+    }
     let mut lines = vec![
         Line::styled(question, theme.text),
         Line::raw(""),
@@ -236,7 +242,14 @@ pub fn prompt(app: &App, f: &mut Frame, area: Rect, p: &Prompt, theme: &Theme) {
         lines.push(Line::styled(e.clone(), theme.error));
         lines.push(Line::raw(""));
     }
-    lines.push(Line::styled("Enter accepts, Esc cancels", theme.dim));
+    lines.push(Line::styled(
+        if p.selected {
+            "type to replace, ←→ to edit; Enter accepts, Esc cancels"
+        } else {
+            "Enter accepts, Esc cancels; C-u clears, C-w deletes a word"
+        },
+        theme.dim,
+    ));
     f.render_widget(Paragraph::new(lines).wrap(Wrap { trim: false }), inside);
 }
 
@@ -300,17 +313,12 @@ pub fn discard(app: &App, f: &mut Frame, area: Rect, then: Then, theme: &Theme) 
         Line::raw(""),
         Line::from(vec![
             key(again),
-            txt(" or "),
+            txt(", "),
             key("y"),
-            Span::styled(format!("  {what} and discard them"), theme.text),
+            Span::styled(format!("    {what} and discard them"), theme.text),
         ]),
         Line::from(vec![key("S"), txt("       save them first")]),
-        Line::from(vec![
-            key("Esc"),
-            txt(" or "),
-            key("n"),
-            txt("  keep editing"),
-        ]),
+        Line::from(vec![key("Esc"), txt(", "), key("n"), txt("  keep editing")]),
     ];
     let w = area.width.saturating_sub(4).min(72);
     let inside = boxed(
