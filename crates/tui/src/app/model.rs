@@ -207,7 +207,7 @@ pub struct App {
     pub running: bool,
     /// Index into [`RATES`].
     pub rate: usize,
-    /// Simulated seconds owed to the simulation by the wall clock.
+    /// Simulated seconds owed when the cloth is stepped inline (tests; the worker keeps its own).
     pub debt: f64,
     /// Selected parameter row.
     pub selected: usize,
