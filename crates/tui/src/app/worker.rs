@@ -1,4 +1,4 @@
-//! A simulation on its own thread: the UI sends [`Command`]s and reads [`Snapshot`]s, so the
+//! A simulation on its own thread: the UI sends [`Command`]s and reads snapshots of it, so the
 //! keyboard is answered at once however long a step takes.
 //!
 //! A worker owns one [`Simulation`] and its clock: while running it owes `wall * rate`
