@@ -2,7 +2,7 @@
 //! pure view draws), and the widget that copies an [`AsciiFrame`] into a ratatui buffer.
 //!
 //! A big cloth is drawn through a [`Display`]: a coarser grid whose points are a subset of the
-//! cloth's, so drawing costs the same at 2048 x 2048 as at 256 x 256 (a pane has far fewer
+//! cloth's, so drawing costs the same at 2048 x 2048 as at 128 x 128 (a pane has far fewer
 //! pixels than that grid has points) and the keyboard is never kept waiting by a draw.
 
 use cloth_render::{
@@ -21,9 +21,10 @@ use super::model::{App, Level};
 
 /// Most points per side drawn; a bigger cloth is drawn through a [`Display`].
 ///
-/// NOTE: a braille pane of 200 x 60 cells has 400 x 240 pixels, so a grid of 256 points a side
-/// still puts more than one triangle under most pixels.
-pub const DISPLAY_SIDE: usize = 256;
+/// NOTE: a braille pane of 100 x 40 cells has 200 x 160 pixels, about what a grid of 128 points
+/// a side covers with a triangle each, and drawing two panes of it leaves a key waiting at most
+/// a few milliseconds.
+pub const DISPLAY_SIDE: usize = 128;
 
 /// A coarser copy of a big cloth for drawing: every k-th point (the edges and corners
 /// included), with the pins moved to their nearest drawn point.

@@ -748,9 +748,9 @@ fn opening_a_cloth_of_more_than_250000_points_asks_first() {
     press(&mut app, KeyCode::Enter);
     press(&mut app, KeyCode::Char('y'));
     assert_eq!(app.sim.scene.mesh.len(), 360_000);
-    // Drawn through a coarser grid of at most 256 points a side.
+    // Drawn through a coarser grid of at most 128 points a side.
     let d = app.display.as_ref().expect("a display grid");
-    assert_eq!((d.mesh.nw(), d.mesh.nh()), (256, 256));
+    assert_eq!((d.mesh.nw(), d.mesh.nh()), (128, 128));
 }
 
 #[test]
