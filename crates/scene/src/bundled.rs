@@ -21,7 +21,8 @@ macro_rules! scene {
     };
 }
 
-/// Every bundled scene: the course's five (unchanged), then clothsim's own.
+/// Every bundled scene: the course's five (unchanged), then clothsim's own (whose descriptions
+/// are their files' `description`, word for word).
 pub const BUNDLED: &[BundledScene] = &[
     scene!(
         "pinned2",
@@ -45,15 +46,15 @@ pub const BUNDLED: &[BundledScene] = &[
     ),
     scene!(
         "curtain",
-        "clothsim: a curtain hung from every third point of its top edge, billowing in a breeze"
+        "A curtain hung from every third point of its top edge, swinging out and leaning in a steady breeze"
     ),
     scene!(
         "drape",
-        "clothsim: a tablecloth falls over a sphere and spreads onto the floor beneath"
+        "A tablecloth falls over a sphere and spreads onto the floor beneath"
     ),
     scene!(
         "hammock",
-        "clothsim: a long cloth slung between two pinned edges, sagging under gravity"
+        "A long cloth slung between two fully pinned edges, sagging into a trough"
     ),
 ];
 
@@ -61,4 +62,19 @@ pub const BUNDLED: &[BundledScene] = &[
 #[must_use]
 pub fn bundled(name: &str) -> Option<&'static BundledScene> {
     BUNDLED.iter().find(|s| s.name == name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bundled_description_is_its_files_own_where_the_file_has_one() {
+        for s in BUNDLED {
+            let v: serde_json::Value = serde_json::from_str(s.json).unwrap();
+            if let Some(d) = v.get("description").and_then(|d| d.as_str()) {
+                assert_eq!(s.description, d, "{}", s.name);
+            }
+        }
+    }
 }

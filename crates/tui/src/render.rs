@@ -11,11 +11,12 @@ use std::str::FromStr;
 use anyhow::Context;
 use cloth_mesh::ClothState;
 use cloth_render::{
-    AsciiFrame, Bounds, ColorChoice, ColorDepth, Extent, FrameSize, Mode, RenderError,
+    AsciiFrame, Bounds, ColorChoice, ColorDepth, ColorEnv, Extent, FrameSize, Mode, RenderError,
     RenderOptions, Renderer, View, ViewSpec,
 };
 use cloth_solver::{Registry, advance_frame};
 
+use crate::guard::{Divergence, Guard};
 use crate::solvers;
 
 /// Columns between the panels of `--view all`.
@@ -87,8 +88,9 @@ pub struct Args {
     /// ascii (glyph ramp), half (half blocks, two pixels per cell) or braille (2 x 4 dots).
     #[arg(long, default_value = "ascii", value_name = "MODE")]
     mode: Mode,
-    /// Colour with `--format ansi`: auto (COLORTERM's depth unless NO_COLOR is set), never,
-    /// 16, 256 or truecolor. Plain format never writes colour.
+    /// Colour with `--format ansi`: auto (the terminal's depth from COLORTERM and TERM, 256
+    /// when they say nothing, none under NO_COLOR or CLICOLOR=0), always, never, 16, 256 or
+    /// truecolor. Plain format never writes colour.
     #[arg(long, default_value = "auto", value_name = "WHEN")]
     color: ColorChoice,
     /// plain (glyphs only) or ansi (with colour escapes).
@@ -112,11 +114,21 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let depth = match args.format {
         Format::Plain => ColorDepth::None,
         // The user asked for escapes, so a pipe does not turn them off; NO_COLOR still does.
-        Format::Ansi => args.color.resolve(
-            true,
-            std::env::var("NO_COLOR").ok().as_deref(),
-            std::env::var("COLORTERM").ok().as_deref(),
-        ),
+        Format::Ansi => {
+            let env = ColorEnv::read(|k| std::env::var(k).ok());
+            match args.color.resolve(true, &env) {
+                // Escapes asked for, and TERM says nothing of the reader: 256 colours.
+                ColorDepth::None
+                    if args.color == ColorChoice::Auto
+                        && env.dumb_terminal()
+                        && env.no_color.as_ref().is_none_or(String::is_empty)
+                        && env.clicolor.as_deref() != Some("0") =>
+                {
+                    ColorDepth::Ansi256
+                }
+                d => d,
+            }
+        }
     };
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
     let choice = solvers::choose(registry, &scene, args.solver.as_deref())?;
@@ -131,13 +143,14 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     // animation does not jump. The simulation is deterministic, so the second pass replays
     // exactly the same states.
     let mut extent: Option<Bounds> = None;
-    simulate(&scene, &choice, args, |_, state| {
+    let diverged = simulate(&scene, &choice, args, u64::MAX, |_, state| {
         let b = Bounds::of_scene(&state.positions, &scene.colliders)?;
         extent = Some(extent.map_or(b, |e| e.union(&b)));
         Ok(())
     })?;
+    let last = diverged.as_ref().map_or(args.frames, |(f, _)| f - 1);
     let Some(extent) = extent else {
-        return Ok(());
+        return diverged_error(&scene, &choice.entry, args, diverged);
     };
 
     let mut renderer = Renderer::new();
@@ -146,7 +159,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     let mut first = true;
-    let result = simulate(&scene, &choice, args, |_, state| {
+    let result = simulate(&scene, &choice, args, last, |_, state| {
         for (view, panel) in views.iter().zip(panels.iter_mut()) {
             let spec = ViewSpec {
                 extent: Extent::Fixed(extent),
@@ -167,33 +180,61 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         out.write_all(text.as_bytes())?;
         Ok(())
     })
-    .and_then(|()| out.flush().map_err(anyhow::Error::from));
+    .and_then(|_| out.flush().map_err(anyhow::Error::from));
     match result {
         // A reader that stops early (`| head`) is not an error.
         Err(e)
             if e.downcast_ref::<std::io::Error>()
                 .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) =>
         {
-            Ok(())
+            return Ok(());
         }
-        other => other.context("cannot write the frames to stdout"),
+        other => other.context("cannot write the frames to stdout")?,
     }
+    diverged_error(&scene, &choice.entry, args, diverged)
 }
 
-/// Simulates `args.frames` frames, calling `each` with the frame number and state of every
-/// printed frame.
+/// The error of a run the guard stopped (after the frames before it were printed).
+fn diverged_error(
+    scene: &cloth_scene::Scene,
+    entry: &cloth_solver::SolverEntry,
+    args: &Args,
+    diverged: Option<(u64, Divergence)>,
+) -> anyhow::Result<()> {
+    let Some((frame, d)) = diverged else {
+        return Ok(());
+    };
+    let point_mass = scene.mesh.point_mass(scene.params.density);
+    anyhow::bail!(
+        "{}: the run diverged at frame {frame} of {} (t = {:.3} s): {}; {}; the frames before \
+         it were printed",
+        scene.origin,
+        args.frames,
+        frame as f64 / scene.params.frames_per_sec,
+        d.describe(),
+        d.advice(entry, &scene.params, point_mass)
+    )
+}
+
+/// Simulates `args.frames` frames (stopping after frame `last`), calling `each` with the
+/// frame number and state of every printed frame, and of the last good frame when the guard
+/// stops the run; returns the frame the guard stopped at and why.
 fn simulate(
     scene: &cloth_scene::Scene,
     choice: &solvers::Choice,
     args: &Args,
+    last: u64,
     mut each: impl FnMut(u64, &ClothState) -> anyhow::Result<()>,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<Option<(u64, Divergence)>> {
     let mut solver = choice.build(&scene.mesh)?;
     let mut state = ClothState::new(&scene.mesh);
+    let mut guard = Guard::new();
+    let point_mass = scene.mesh.point_mass(scene.params.density);
     if printed(0, args.frames, args.every) {
         each(0, &state)?;
     }
-    for f in 1..=args.frames {
+    let mut good = state.clone();
+    for f in 1..=args.frames.min(last) {
         advance_frame(
             solver.as_mut(),
             &scene.mesh,
@@ -202,11 +243,20 @@ fn simulate(
             &mut state,
         )
         .with_context(|| format!("{}: frame {f} of {}", scene.origin, args.frames))?;
-        if printed(f, args.frames, args.every) {
+        let time = f as f64 / scene.params.frames_per_sec;
+        if let Err(d) = guard.check_state(&state, &scene.params, point_mass, time) {
+            // The last good frame is shown, as the live UI shows it.
+            if f > 1 && !printed(f - 1, args.frames, args.every) {
+                each(f - 1, &good)?;
+            }
+            return Ok(Some((f, d)));
+        }
+        if printed(f, args.frames, args.every) || f == last {
             each(f, &state)?;
         }
+        good.clone_from(&state);
     }
-    Ok(())
+    Ok(None)
 }
 
 /// Writes the panels next to each other under a label line naming each view and its axes.

@@ -9,6 +9,7 @@ use cloth_mesh::{ClothMesh, ClothState, vertex_normals};
 use cloth_solver::{Registry, advance_frame};
 use serde::Serialize;
 
+use crate::guard::Guard;
 use crate::{output, solvers};
 
 /// Arguments of `clothsim simulate`.
@@ -38,6 +39,9 @@ struct FinalState {
     num_height_points: usize,
     frames: u64,
     time: f64,
+    /// Whether the run was stopped by the divergence guard (the state is where it stopped).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    diverged: bool,
     positions: Vec<[f64; 3]>,
 }
 
@@ -66,13 +70,17 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         },
     };
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
-    let mut solver =
-        solvers::choose(registry, &scene, args.solver.as_deref())?.build(&scene.mesh)?;
+    let choice = solvers::choose(registry, &scene, args.solver.as_deref())?;
+    let mut solver = choice.build(&scene.mesh)?;
     let mut state = ClothState::new(&scene.mesh);
     let params = scene.params;
 
     let progress = progress_bar(args.frames);
-    for frame in 0..args.frames {
+    let mut guard = Guard::new();
+    let point_mass = scene.mesh.point_mass(params.density);
+    let mut diverged = None;
+    let mut done = 0;
+    for frame in 1..=args.frames {
         advance_frame(
             solver.as_mut(),
             &scene.mesh,
@@ -80,7 +88,13 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             &params,
             &mut state,
         )
-        .with_context(|| format!("{}: frame {} of {}", scene.origin, frame + 1, args.frames))?;
+        .with_context(|| format!("{}: frame {frame} of {}", scene.origin, args.frames))?;
+        done = frame;
+        let time = frame as f64 / params.frames_per_sec;
+        if let Err(d) = guard.check_state(&state, &params, point_mass, time) {
+            diverged = Some((time, d));
+            break;
+        }
         if let Some(p) = &progress {
             p.inc(1);
         }
@@ -88,14 +102,24 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     if let Some(p) = progress {
         p.finish_and_clear();
     }
+    let diverged = diverged.map(|(time, d)| {
+        format!(
+            "{}: the run diverged at frame {done} of {} (t = {time:.3} s): {}; {}",
+            scene.origin,
+            args.frames,
+            d.describe(),
+            d.advice(&choice.entry, &params, point_mass)
+        )
+    });
 
     let bytes = match format {
         Format::Json => {
             let fs = FinalState {
                 num_width_points: scene.mesh.nw(),
                 num_height_points: scene.mesh.nh(),
-                frames: args.frames,
-                time: args.frames as f64 / params.frames_per_sec,
+                frames: done,
+                time: done as f64 / params.frames_per_sec,
+                diverged: diverged.is_some(),
                 positions: state.positions.iter().map(|p| [p.x, p.y, p.z]).collect(),
             };
             let mut s = serde_json::to_string(&fs)?;
@@ -104,6 +128,18 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         }
         Format::Obj => obj(&scene.mesh, &state, &scene.origin).into_bytes(),
     };
+    if let Some(what) = diverged {
+        // The state reached is kept under a name that says so, never as the result asked for.
+        if let Some(path) = &args.out {
+            let kept = diverged_name(path);
+            output::write_atomic(&kept, &bytes)?;
+            anyhow::bail!("{what}; the state it reached is in {}", kept.display());
+        }
+        anyhow::bail!(
+            "{what}; nothing was written (with --out FILE the state it reached is kept as \
+             FILE.diverged)"
+        );
+    }
     if let Some(path) = &args.out {
         output::write_atomic(path, &bytes)
     } else {
@@ -112,6 +148,21 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             .and_then(|()| out.flush())
             .context("cannot write to stdout")
     }
+}
+
+/// `out.json` -> `out.diverged.json`: where a diverged run's state is kept.
+fn diverged_name(path: &std::path::Path) -> PathBuf {
+    let stem = path.file_stem().map_or_else(
+        || std::ffi::OsString::from("state"),
+        std::ffi::OsStr::to_os_string,
+    );
+    let mut name = stem;
+    name.push(".diverged");
+    if let Some(ext) = path.extension() {
+        name.push(".");
+        name.push(ext);
+    }
+    path.with_file_name(name)
 }
 
 /// A progress bar on stderr for runs long enough to want one, only when stderr is a terminal.
