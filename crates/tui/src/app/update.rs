@@ -497,24 +497,21 @@ fn undo(app: &mut App) {
         app.say(Level::Warn, format!("{e:#}"));
         return;
     }
-    match row_at {
-        Some(r) => {
-            app.selected = r;
-            if row(&app.sim, r).kind == Kind::Solver {
-                app.say(Level::Info, format!("undone: solver {name}"));
-                if let Some(w) = app.sim.stability_warning() {
-                    app.say(Level::Warn, w);
-                }
-            } else {
-                changed(app, r);
-                if let Some(n) = &mut app.note {
-                    n.text = format!("undone: {}", n.text);
-                }
-            }
+    let Some(r) = row_at else {
+        app.selected = app.selected.min(row_count(&app.sim) - 1);
+        app.say(Level::Info, "undone");
+        return;
+    };
+    app.selected = r;
+    if row(&app.sim, r).kind == Kind::Solver {
+        app.say(Level::Info, format!("undone: solver {name}"));
+        if let Some(w) = app.sim.stability_warning() {
+            app.say(Level::Warn, w);
         }
-        None => {
-            app.selected = app.selected.min(row_count(&app.sim) - 1);
-            app.say(Level::Info, "undone");
+    } else {
+        changed(app, r);
+        if let Some(n) = &mut app.note {
+            n.text = format!("undone: {}", n.text);
         }
     }
 }
