@@ -431,3 +431,65 @@ pub fn numeric_options(entry: &SolverEntry, options: &Value) -> Vec<f64> {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pinned4(registry: Registry) -> Simulation {
+        let scene = cloth_scene::load("pinned4", &[]).unwrap();
+        Simulation::new(scene, registry, None).unwrap()
+    }
+
+    #[test]
+    fn new_settings_with_other_option_values_rebuild_the_solver_with_them() {
+        let mut sim = pinned4(crate::default_registry());
+        let entry = *sim.entry();
+        let (k, option) = entry
+            .options()
+            .iter()
+            .filter(|o| o.numeric().is_some())
+            .enumerate()
+            .next()
+            .expect("the default solver has a numeric option row");
+        let (min, max, default) = option.numeric().unwrap();
+        // Any other allowed value: the worker must build with what the UI sent, not keep its own.
+        let other = if default < max {
+            (default + 1.0).min(max)
+        } else {
+            min
+        };
+        let mut settings = sim.settings.clone();
+        settings.options[k] = other;
+        sim.apply(Command::Settings(settings)).unwrap();
+        assert_eq!(sim.settings.options[k], other);
+        assert_eq!(
+            sim.options().get(option.name).and_then(Value::as_f64),
+            Some(other),
+            "{}",
+            sim.options()
+        );
+        assert!(sim.step_frame().is_ok());
+    }
+
+    #[test]
+    fn a_solver_command_switches_by_name_and_an_unknown_name_keeps_the_solver() {
+        let registry = crate::default_registry();
+        let names: Vec<&str> = registry.names().collect();
+        let mut sim = pinned4(registry.clone());
+        let last = names[names.len() - 1];
+        sim.apply(Command::Solver(last.to_owned())).unwrap();
+        assert_eq!(sim.entry().name(), last);
+        // The options rows are the new solver's, as the scene gives them.
+        assert_eq!(
+            sim.settings.options,
+            numeric_options(sim.entry(), sim.options())
+        );
+        let err = sim
+            .apply(Command::Solver("no-such-solver".to_owned()))
+            .unwrap_err();
+        assert!(err.contains("no-such-solver"), "{err}");
+        assert_eq!(sim.entry().name(), last);
+        assert!(sim.step_frame().is_ok());
+    }
+}
