@@ -358,7 +358,7 @@ mod tests {
     use std::time::Duration;
 
     use cloth_mesh::ClothState;
-    use cloth_solver::{Verlet, advance_frame};
+    use cloth_solver::advance_frame;
 
     use super::*;
 
@@ -401,8 +401,13 @@ mod tests {
         assert_eq!(mirror.steps, 30);
         let scene = cloth_scene::load("pinned4", &[]).unwrap();
         let mut state = ClothState::new(&scene.mesh);
+        // The headless path builds the same solver the same way: through the registry.
+        let mut solver = crate::solvers::choose(&crate::default_registry(), &scene, None)
+            .unwrap()
+            .build(&scene.mesh)
+            .unwrap();
         advance_frame(
-            &mut Verlet::new(),
+            solver.as_mut(),
             &scene.mesh,
             &scene.colliders,
             &scene.params,
