@@ -167,6 +167,32 @@ impl Orbit {
         }
     }
 
+    /// A camera that frames the whole scene from slightly above: the cloth at its start,
+    /// every sphere, and room below the cloth to sag or fall by half its size, looking along
+    /// -z (the course's direction) from 20 degrees up, far enough that the sphere around all
+    /// of it fits the 40 degree vertical field of view (so nothing is cut at any yaw).
+    #[must_use]
+    pub fn framing(mesh: &ClothMesh, colliders: &[cloth_mesh::Collider]) -> Self {
+        let course = Self::course_default(mesh);
+        let Ok(b) = Bounds::of_solids(mesh.start_positions(), colliders) else {
+            return course;
+        };
+        let spec = mesh.spec();
+        let size = spec.width.max(spec.height);
+        let b = b.including(Vec3::new(b.min.x, b.min.y - 0.5 * size, b.min.z));
+        let radius = 0.5 * (b.max - b.min).norm();
+        if !(radius.is_finite() && radius > 0.0) {
+            return course;
+        }
+        Self {
+            target: 0.5 * (b.min + b.max),
+            yaw: 0.0,
+            pitch: 20f64.to_radians(),
+            distance: radius / (0.5 * course.vfov).sin(),
+            vfov: course.vfov,
+        }
+    }
+
     /// Where the camera is, metres.
     #[must_use]
     pub fn eye(&self) -> Vec3 {

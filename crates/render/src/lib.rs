@@ -30,8 +30,8 @@
 //! 4. Map each pixel to a glyph (ramps in [`FRONT_RAMP`] and friends, ordered Bayer dither),
 //!    a half block or a braille dot; mark pins.
 //!
-//! Colour never carries information that the glyphs do not, except in half-block mode, whose
-//! shading is colour by nature (without colour it draws coverage only).
+//! Colour never carries information that the glyphs do not: half-block mode without colour
+//! shades covered cells with shade blocks (`░▒▓█`).
 
 mod bounds;
 mod camera;
@@ -45,7 +45,7 @@ mod renderer;
 
 pub use bounds::Bounds;
 pub use camera::{Camera, Extent, Orbit, Projected, View, ViewSpec};
-pub use color::{ColorChoice, ColorDepth};
+pub use color::{ColorChoice, ColorDepth, ColorEnv, TermColor, xterm_rgb};
 pub use error::RenderError;
 pub use frame::{AsciiFrame, Cell, FrameSize, MAX_HEIGHT, MAX_WIDTH, MIN_HEIGHT, MIN_WIDTH, Rgb};
 pub use glyphs::{

@@ -121,7 +121,7 @@ pub struct RenderOptions {
     /// Draw a small axis legend in the bottom-left corner of orthographic views (default false).
     pub legend: bool,
     /// Fill in cell colours (default true). When the output will be shown without colour, set
-    /// it false: half-block mode then draws coverage glyphs that read without colour.
+    /// it false: half-block mode then shades with shade blocks that read without colour.
     pub color: bool,
 }
 

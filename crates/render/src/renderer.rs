@@ -490,7 +490,12 @@ fn compose(
                 }
                 Mode::Half => {
                     let (i, j) = (2 * cy * pw + cx, (2 * cy + 1) * pw + cx);
-                    half_cell(material[i], shade[i], material[j], shade[j], options.color)
+                    half_cell(
+                        (material[i], shade[i]),
+                        (material[j], shade[j]),
+                        options.color,
+                        (cx, cy),
+                    )
                 }
                 Mode::Braille => {
                     // Dot bits of U+2800 by (column, row) within the 2 x 4 cell.
@@ -532,8 +537,20 @@ fn compose(
     }
 }
 
-/// One half-block cell from its upper and lower pixel.
-fn half_cell(mu: Material, su: f32, ml: Material, sl: f32, color: bool) -> Cell {
+/// Shade blocks, darkest first: a half-block cell without colour covered top and bottom.
+pub const SHADE_BLOCKS: &[char] = &['░', '▒', '▓', '█'];
+
+/// One half-block cell from its upper and lower pixel (material, shade) at cell `at`.
+///
+/// With colour, each half takes its pixel's colour. Without, a half-covered cell is its half
+/// block, and a covered one a shade block ([`SHADE_BLOCKS`], dithered) of the two pixels'
+/// mean shade, so the cloth keeps its shading rather than becoming a flat silhouette.
+fn half_cell(
+    (mu, su): (Material, f32),
+    (ml, sl): (Material, f32),
+    color: bool,
+    (cx, cy): (usize, usize),
+) -> Cell {
     if color {
         match (colour(mu, su), colour(ml, sl)) {
             (None, None) => Cell::BLANK,
@@ -553,7 +570,8 @@ fn half_cell(mu: Material, su: f32, ml: Material, sl: f32, color: bool) -> Cell 
             (false, false) => ' ',
             (true, false) => '\u{2580}',
             (false, true) => '\u{2584}',
-            (true, true) => '\u{2588}',
+            // NOTE: lifted like braille's dots, so a dark surface never reads as empty.
+            (true, true) => ramp_glyph(SHADE_BLOCKS, 0.2 + 0.8 * 0.5 * (su + sl), cx, cy),
         };
         Cell {
             glyph,

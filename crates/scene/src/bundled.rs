@@ -19,3 +19,18 @@ include!(concat!(env!("OUT_DIR"), "/bundled.rs"));
 pub fn bundled(name: &str) -> Option<&'static BundledScene> {
     BUNDLED.iter().find(|s| s.name == name)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bundled_description_is_its_files_own_where_the_file_has_one() {
+        for s in BUNDLED {
+            let v: serde_json::Value = serde_json::from_str(s.json).unwrap();
+            if let Some(d) = v.get("description").and_then(|d| d.as_str()) {
+                assert_eq!(s.description, d, "{}", s.name);
+            }
+        }
+    }
+}

@@ -1,12 +1,14 @@
 //! `clothsim tui`: the live terminal UI (the default command).
 //!
-//! Elm architecture, synchronous: a model ([`App`]), messages ([`Message`]), one
-//! [`update()`] function that changes the model, and a pure [`view()`]. Terminal events become
-//! messages in [`input`]; the one [`keymap::KEYMAP`] dispatches keys and generates the footer
-//! and the help; the one [`params::PARAMS`] table drives the parameter panel. The loop in
-//! [`runner`] owns the only clock: it feeds wall time to a fixed-step accumulator with a
-//! per-frame budget, draws at most `--fps` times a second and only when something changed.
+//! Elm architecture: a model ([`App`]), messages ([`Message`]), one [`update()`] function that
+//! changes the model, and a pure [`view()`]. Terminal events become messages in [`input`]
+//! (after [`escape`] joins split escape sequences); the one [`keymap::KEYMAP`] dispatches keys
+//! and generates the footer and the help; the one [`params::PARAMS`] table drives the
+//! parameter panel. The cloth steps on its own thread ([`worker`]), which owns the simulation
+//! clock; the loop in [`runner`] waits on one channel for keys, signals and the worker's
+//! snapshots, answers each at once and draws at most `--fps` times a second.
 
+mod escape;
 mod input;
 mod keymap;
 mod layout;
@@ -15,17 +17,20 @@ mod model;
 mod panes;
 mod params;
 mod runner;
+mod sgr;
 mod sim;
+mod terminal;
 mod theme;
 mod update;
 mod view;
+mod worker;
 
 #[cfg(test)]
 mod tests;
 
 use std::io::IsTerminal;
 
-use cloth_render::{ColorChoice, ColorDepth, Mode};
+use cloth_render::{ColorChoice, ColorDepth, ColorEnv, Mode};
 use cloth_solver::Registry;
 
 pub use message::Message;
@@ -54,11 +59,15 @@ pub struct Args {
     /// Most frames drawn per second (1 to 240).
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=240))]
     pub fps: u32,
-    /// Colour: under auto the interface is coloured and the cloth stays in glyphs; a depth
-    /// (16, 256, truecolor) colours the cloth too.
+    /// Colour: auto (interface colours when the terminal has them and NO_COLOR, CLICOLOR and
+    /// CLICOLOR_FORCE allow; glyph-only cloth), always (coloured cloth too, at the terminal's
+    /// depth), never, or 16 / 256 / truecolor (coloured cloth at that depth).
     #[arg(long, value_name = "WHEN", default_value = "auto", ignore_case = true,
           value_parser = crate::cli::color_parser())]
     pub color: ColorChoice,
+    /// Leave the mouse to the terminal (to select text); M toggles it in the UI.
+    #[arg(long)]
+    pub no_mouse: bool,
     /// Glyph mode of the cloth panes.
     #[arg(long, default_value = "ascii", ignore_case = true,
           value_parser = crate::cli::mode_parser())]
@@ -74,33 +83,51 @@ impl Default for Args {
             paused: false,
             fps: 30,
             color: ColorChoice::Auto,
+            no_mouse: false,
             mode: Mode::Ascii,
         }
     }
 }
 
 /// Builds the app for `args` with the solvers of `registry` (no terminal involved), as the
-/// binary and the tests do.
+/// binary and the tests do, with the colour environment `env` (the tests give their own).
 ///
 /// # Errors
 /// A scene that does not load or a solver that is not registered or refuses its options.
-pub fn build(args: &Args, registry: &Registry, is_tty: bool) -> anyhow::Result<App> {
+pub fn build_in(
+    args: &Args,
+    registry: &Registry,
+    is_tty: bool,
+    env: &ColorEnv,
+) -> anyhow::Result<App> {
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
     let sim = Simulation::new(scene, registry.clone(), args.solver.as_deref())?;
     let mut app = App::new(sim, !args.paused);
-    let no_color = std::env::var("NO_COLOR").ok();
-    let colorterm = std::env::var("COLORTERM").ok();
-    let depth = args
-        .color
-        .resolve(is_tty, no_color.as_deref(), colorterm.as_deref());
+    let depth = args.color.resolve(is_tty, env);
     app.color_allowed = depth != ColorDepth::None;
-    if depth != ColorDepth::None {
-        app.depth = depth;
-    }
+    // NOTE: with colour off, C still turns the cloth's colour on, at the terminal's depth.
+    app.depth = match depth {
+        ColorDepth::None => match env.depth() {
+            ColorDepth::None => ColorDepth::Ansi16,
+            d => d,
+        },
+        d => d,
+    };
     // NOTE: per-cell cloth colour multiplies the bytes per frame; under `auto` only the
     // interface is coloured and the cloth stays in glyphs (C turns its colour on).
     app.color = args.color != ColorChoice::Auto && depth != ColorDepth::None;
     app.mode = args.mode;
+    app.mouse = !args.no_mouse;
+    let n = app.sim.scene.mesh.len();
+    if n > update::BIG_CLOTH {
+        app.say(
+            model::Level::Warn,
+            format!(
+                "a big cloth ({n} points): it may run slower than real time; the keys answer \
+                 at once all the same"
+            ),
+        );
+    }
     if let Ok(cwd) = std::env::current_dir() {
         app.cwd = cwd;
     }
@@ -118,6 +145,17 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
              pipe use `clothsim render` (or `clothsim simulate` for the final state)"
         );
     }
-    let app = build(args, registry, true)?;
+    let env = ColorEnv::read(|k| std::env::var(k).ok());
+    if env.dumb_terminal() {
+        anyhow::bail!(
+            "the live UI needs a terminal with cursor addressing, but TERM is {}; to see the \
+             cloth as plain text use `clothsim render {}` (frames as lines of text)",
+            env.term
+                .as_deref()
+                .map_or("unset".to_owned(), |t| format!("{t:?}")),
+            args.scene
+        );
+    }
+    let app = build_in(args, registry, true, &env)?;
     runner::run(app, args.fps)
 }

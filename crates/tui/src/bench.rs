@@ -25,6 +25,8 @@ use cloth_mesh::{ClothMesh, ClothState};
 use cloth_solver::{Registry, Solver, SolverEntry, StepParams, max_stretch_ratio};
 use serde_json::{Map, Value};
 
+use crate::guard::Guard;
+
 /// `clothsim bench` options.
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -202,6 +204,8 @@ fn time_grid(
             let before = CpuTimes::now();
             let result = time_frames(solver.as_mut(), &mesh, &[], params, &mut state, run)
                 .with_context(|| config.describe(n))?;
+            held_together(solver.as_mut(), &mesh, params, &mut state, config, run)
+                .with_context(|| config.describe(n))?;
             rows.push(Row {
                 n,
                 config: config.clone(),
@@ -227,6 +231,10 @@ fn time_grid(
     let timed = time_interleaved(&mut runs, &mesh, &[], params, run)
         .map_err(|(i, e)| anyhow::Error::new(e).context(configs[i].describe(n)))?;
     let steal = steal_since(before);
+    for ((solver, state), config) in solvers.iter_mut().zip(states.iter_mut()).zip(configs) {
+        held_together(solver.as_mut(), &mesh, params, state, config, run)
+            .with_context(|| config.describe(n))?;
+    }
     Ok(configs
         .iter()
         .zip(timed)
@@ -240,6 +248,41 @@ fn time_grid(
             steal,
         })
         .collect())
+}
+
+/// Whether the timed cloth held together: the divergence guard of `simulate` and `render`
+/// watches one more window of frames after the timing (a run that ended non-finite, or whose
+/// speed and energy are still growing without bound, is no timing of a cloth).
+///
+/// # Errors
+/// The divergence, with its advice.
+fn held_together(
+    solver: &mut dyn Solver,
+    mesh: &ClothMesh,
+    params: &StepParams,
+    state: &mut ClothState,
+    config: &Config,
+    run: BenchRun,
+) -> anyhow::Result<()> {
+    let point_mass = mesh.point_mass(params.density);
+    let mut guard = Guard::new();
+    let frames = (crate::guard::WINDOW * params.frames_per_sec).ceil() as u64 + 1;
+    for f in 0..=frames {
+        if f > 0 {
+            cloth_solver::advance_frame(solver, mesh, &[], params, state)?;
+        }
+        // Simulated time since the start: gravity's share of the speed grows with it.
+        let time = (u64::from(run.warmup_frames) + u64::from(run.frames) + f) as f64
+            / params.frames_per_sec;
+        if let Err(d) = guard.check_state(state, params, point_mass, time) {
+            anyhow::bail!(
+                "the run diverged, so its timing means nothing: {}; {}",
+                d.describe(),
+                d.advice(&config.entry, params, point_mass)
+            );
+        }
+    }
+    Ok(())
 }
 
 /// The share of processor time stolen since `before` (see [`crate::steal`]).

@@ -327,8 +327,11 @@ pub(crate) fn mode_parser() -> impl TypedValueParser<Value = Mode> {
 /// `--color`: when and how deep to colour.
 pub(crate) fn color_parser() -> impl TypedValueParser<Value = ColorChoice> {
     choice([
-        PossibleValue::new("auto")
-            .help("colour on a terminal unless NO_COLOR is set; depth from COLORTERM"),
+        PossibleValue::new("auto").help(
+            "interface colours on a terminal (NO_COLOR, CLICOLOR, CLICOLOR_FORCE respected); \
+             the cloth in glyphs",
+        ),
+        PossibleValue::new("always").help("colour the cloth too, at the terminal's depth"),
         PossibleValue::new("never")
             .aliases(["none", "off"])
             .help("glyphs only"),
@@ -438,6 +441,8 @@ mod tests {
         assert_eq!(cli.tui.color, ColorChoice::Never);
         let cli = parse(&["--color", "24bit"]);
         assert_eq!(cli.tui.color, ColorChoice::TrueColor);
+        let cli = parse(&["--color", "ALWAYS"]);
+        assert_eq!(cli.tui.color, ColorChoice::Always);
         let e = Cli::try_parse_from(["clothsim", "--mode", "sixel"]).expect_err("not a mode");
         let e = e.to_string();
         assert!(e.contains("possible values: ascii, half, braille"), "{e}");

@@ -22,6 +22,7 @@
 mod app;
 mod bench;
 mod cli;
+mod guard;
 mod headless;
 mod output;
 mod progress;

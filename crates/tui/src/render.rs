@@ -9,11 +9,12 @@ use std::str::FromStr;
 
 use cloth_mesh::{ClothState, Collider, Vec3};
 use cloth_render::{
-    AsciiFrame, Bounds, ColorChoice, ColorDepth, Extent, FrameSize, Mode, RenderError,
+    AsciiFrame, Bounds, ColorChoice, ColorDepth, ColorEnv, Extent, FrameSize, Mode, RenderError,
     RenderOptions, Renderer, View, ViewSpec,
 };
 use cloth_solver::Registry;
 
+use crate::guard::{Divergence, Guard};
 use crate::output::Stdout;
 use crate::progress::{Progress, When};
 use crate::state_file::StateFile;
@@ -90,7 +91,9 @@ pub struct Args {
     #[arg(long, default_value = "ascii", value_name = "MODE", ignore_case = true,
           value_parser = crate::cli::mode_parser())]
     mode: Mode,
-    /// Colour with `--format ansi` (plain format never writes colour).
+    /// Colour with `--format ansi`: auto (the terminal's depth from COLORTERM and TERM, 256
+    /// when they say nothing, none under NO_COLOR or CLICOLOR=0), always, never, 16, 256 or
+    /// truecolor. Plain format never writes colour.
     #[arg(long, default_value = "auto", value_name = "WHEN", ignore_case = true,
           value_parser = crate::cli::color_parser())]
     color: ColorChoice,
@@ -134,11 +137,21 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let depth = match args.format {
         Format::Plain => ColorDepth::None,
         // The user asked for escapes, so a pipe does not turn them off; NO_COLOR still does.
-        Format::Ansi => args.color.resolve(
-            true,
-            std::env::var("NO_COLOR").ok().as_deref(),
-            std::env::var("COLORTERM").ok().as_deref(),
-        ),
+        Format::Ansi => {
+            let env = ColorEnv::read(|k| std::env::var(k).ok());
+            match args.color.resolve(true, &env) {
+                // Escapes asked for, and TERM says nothing of the reader: 256 colours.
+                ColorDepth::None
+                    if args.color == ColorChoice::Auto
+                        && env.dumb_terminal()
+                        && env.no_color.as_ref().is_none_or(String::is_empty)
+                        && env.clicolor.as_deref() != Some("0") =>
+                {
+                    ColorDepth::Ansi256
+                }
+                d => d,
+            }
+        }
     };
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
     let choice = solvers::choose(registry, &scene, args.solver.as_deref())?;
@@ -167,7 +180,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let mut text = String::new();
     let mut out = Stdout::new();
     let mut first = true;
-    simulate(&scene, &choice, args, &start, |_, state| {
+    let diverged = simulate(&scene, &choice, args, &start, |_, state| {
         let now = Bounds::of_scene(&state.positions, &scene.colliders)?;
         let fitted = extent.map_or(now, |e| e.union(&now));
         if extent.is_some() {
@@ -195,7 +208,8 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         out.write_all_or_fail(text.as_bytes())?;
         out.flush_or_fail()
     })?;
-    out.finish()
+    out.finish()?;
+    diverged_error(&scene, &choice.entry, args, diverged)
 }
 
 /// Where the scene can take the cloth in `frames` frames, as the box the views are fitted to.
@@ -265,17 +279,42 @@ fn predicted_extent(
     Ok(predicted.with_floors(&predicted, &scene.colliders))
 }
 
+/// The error of a run the guard stopped (after the frames before it were printed).
+fn diverged_error(
+    scene: &cloth_scene::Scene,
+    entry: &cloth_solver::SolverEntry,
+    args: &Args,
+    diverged: Option<(u64, Divergence)>,
+) -> anyhow::Result<()> {
+    let Some((frame, d)) = diverged else {
+        return Ok(());
+    };
+    let point_mass = scene.mesh.point_mass(scene.params.density);
+    anyhow::bail!(
+        "{}: the run diverged at frame {frame} of {} (t = {:.3} s): {}; {}; the frames before \
+         it were printed",
+        scene.origin,
+        args.frames,
+        frame as f64 / scene.params.frames_per_sec,
+        d.describe(),
+        d.advice(entry, &scene.params, point_mass)
+    )
+}
+
 /// Simulates `args.frames` frames from `start`, calling `each` with the frame number and state
-/// of every printed frame.
+/// of every printed frame, and of the last good frame when the guard stops the run; returns the
+/// frame the guard stopped at and why.
 fn simulate(
     scene: &cloth_scene::Scene,
     choice: &solvers::Choice,
     args: &Args,
     start: &ClothState,
     mut each: impl FnMut(u64, &ClothState) -> anyhow::Result<()>,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<Option<(u64, Divergence)>> {
     let mut solver = choice.build(&scene.mesh)?;
     let mut state = start.clone();
+    let mut guard = Guard::new();
+    let point_mass = scene.mesh.point_mass(scene.params.density);
     let mut progress = Progress::new(
         args.progress,
         &scene.origin,
@@ -283,10 +322,11 @@ fn simulate(
         scene.params.steps_per_frame,
         Stdout::is_terminal(),
     );
-    let mut run = || -> anyhow::Result<()> {
+    let mut run = || -> anyhow::Result<Option<(u64, Divergence)>> {
         if printed(0, args.frames, args.every) {
             each(0, &state)?;
         }
+        let mut good = state.clone();
         for f in 1..=args.frames {
             headless::advance_frame(
                 solver.as_mut(),
@@ -297,11 +337,20 @@ fn simulate(
                 (f, args.frames),
                 &mut progress,
             )?;
+            let time = f as f64 / scene.params.frames_per_sec;
+            if let Err(d) = guard.check_state(&state, &scene.params, point_mass, time) {
+                // The last good frame is shown, as the live UI shows it.
+                if f > 1 && !printed(f - 1, args.frames, args.every) {
+                    each(f - 1, &good)?;
+                }
+                return Ok(Some((f, d)));
+            }
             if printed(f, args.frames, args.every) {
                 each(f, &state)?;
             }
+            good.clone_from(&state);
         }
-        Ok(())
+        Ok(None)
     };
     let result = run();
     progress.finish();

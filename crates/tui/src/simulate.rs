@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use cloth_mesh::{ClothMesh, ClothState, vertex_normals};
 use cloth_solver::Registry;
 
+use crate::guard::Guard;
 use crate::progress::{Progress, When};
 use crate::state_file::StateFile;
 use crate::{headless, output, solvers};
@@ -95,6 +96,10 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         params.steps_per_frame,
         false,
     );
+    let mut guard = Guard::new();
+    let point_mass = scene.mesh.point_mass(params.density);
+    let mut diverged = None;
+    let mut done = 0;
     for frame in 1..=args.frames {
         let advanced = headless::advance_frame(
             solver.as_mut(),
@@ -109,24 +114,52 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             progress.finish();
             return Err(e);
         }
+        done = frame;
+        let time = frame as f64 / params.frames_per_sec;
+        if let Err(d) = guard.check_state(&state, &params, point_mass, time) {
+            diverged = Some((time, d));
+            break;
+        }
     }
     progress.finish();
+    let diverged = diverged.map(|(time, d)| {
+        format!(
+            "{}: the run diverged at frame {done} of {} (t = {time:.3} s): {}; {}",
+            scene.origin,
+            args.frames,
+            d.describe(),
+            d.advice(&choice.entry, &params, point_mass)
+        )
+    });
 
     let bytes = match format {
         Format::Json => {
-            let fs = StateFile::new(
+            let mut fs = StateFile::new(
                 &scene.mesh,
                 &state,
-                start_frames.saturating_add(args.frames),
-                start_time + args.frames as f64 / params.frames_per_sec,
+                start_frames.saturating_add(done),
+                start_time + done as f64 / params.frames_per_sec,
                 params.dt(),
             );
+            fs.diverged = diverged.is_some();
             let mut s = serde_json::to_string(&fs)?;
             s.push('\n');
             s.into_bytes()
         }
         Format::Obj => obj(&scene.mesh, &state, &scene.origin).into_bytes(),
     };
+    if let Some(what) = diverged {
+        // The state reached is kept under a name that says so, never as the result asked for.
+        if let Some(path) = &args.out {
+            let kept = diverged_name(path);
+            output::write_atomic(&kept, &bytes)?;
+            anyhow::bail!("{what}; the state it reached is in {}", kept.display());
+        }
+        anyhow::bail!(
+            "{what}; nothing was written (with --out FILE the state it reached is kept as \
+             FILE.diverged)"
+        );
+    }
     if let Some(path) = &args.out {
         let written = output::write_atomic(path, &bytes)?;
         if let Some(note) = written.note() {
@@ -139,6 +172,21 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         out.write_all_or_fail(&bytes)?;
         out.finish()
     }
+}
+
+/// `out.json` -> `out.diverged.json`: where a diverged run's state is kept.
+fn diverged_name(path: &std::path::Path) -> PathBuf {
+    let stem = path.file_stem().map_or_else(
+        || std::ffi::OsString::from("state"),
+        std::ffi::OsStr::to_os_string,
+    );
+    let mut name = stem;
+    name.push(".diverged");
+    if let Some(ext) = path.extension() {
+        name.push(".");
+        name.push(ext);
+    }
+    path.with_file_name(name)
 }
 
 /// A Wavefront OBJ of the cloth: vertices, area-weighted normals and the mesh's triangles.

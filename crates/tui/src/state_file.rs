@@ -45,6 +45,10 @@ pub struct StateFile {
     /// The step between `last_positions` and `positions`, seconds (absent: the reading run's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dt: Option<f64>,
+    /// Whether the divergence guard stopped the run that wrote it (the state is where it
+    /// stopped); written only when true.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub diverged: bool,
 }
 
 impl StateFile {
@@ -60,6 +64,7 @@ impl StateFile {
             positions: list(&state.positions),
             last_positions: Some(list(&state.last)),
             dt: Some(dt),
+            diverged: false,
         }
     }
 

@@ -647,3 +647,63 @@ fn a_state_of_another_grid_is_refused_naming_both_grids() {
         );
     }
 }
+
+#[test]
+fn a_headless_run_that_blows_up_says_so_and_exits_non_zero_keeping_the_state_as_diverged() {
+    // Verlet at 2 steps per frame: dt = 1/180 s puts its limit m / (2 dt^2) at 972 N/m for
+    // pinned4's 0.06 kg points, five times below its ks, so the error multiplies every step.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("state.json");
+    let o = clothsim(&[
+        "simulate",
+        "pinned4",
+        "--frames",
+        "90",
+        "--set",
+        "simulation.simulation_steps=2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("diverged at frame"), "{e}");
+    assert!(e.contains("steps/frame"), "the advice names the cure: {e}");
+    assert!(!out.exists(), "the result asked for is not written");
+    let kept = dir.path().join("state.diverged.json");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&kept).unwrap()).unwrap();
+    assert_eq!(v["diverged"], true);
+    assert!(v["frames"].as_u64().unwrap() < 90);
+
+    let o = clothsim(&[
+        "render",
+        "pinned4",
+        "--frames",
+        "90",
+        "--every",
+        "1",
+        "--set",
+        "simulation.simulation_steps=2",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("diverged at frame"), "{}", stderr(&o));
+    assert!(!o.stdout.is_empty(), "the frames before it are printed");
+}
+
+#[test]
+fn the_stretch_limit_off_experiment_runs_to_the_end_headless() {
+    // Without the course's limit the springs stretch far (about 3x) and settle: not a
+    // divergence.
+    let o = clothsim(&[
+        "simulate",
+        "pinned4",
+        "--frames",
+        "270",
+        "--set",
+        "simulation.stretch_limit=false",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["frames"], 270);
+    assert!(v.get("diverged").is_none());
+}

@@ -10,7 +10,7 @@ use ratatui::crossterm::event::{
 
 use super::keymap;
 use super::message::Message;
-use super::model::{App, Overlay};
+use super::model::{App, Overlay, Then};
 
 /// The message for a terminal event, if it means anything now.
 pub fn message(app: &App, event: &Event) -> Option<Message> {
@@ -26,9 +26,12 @@ pub fn message(app: &App, event: &Event) -> Option<Message> {
 }
 
 fn key(app: &App, k: &KeyEvent) -> Option<Message> {
-    let ctrl_c = k.code == KeyCode::Char('c') && k.modifiers.contains(KeyModifiers::CONTROL);
-    if ctrl_c {
-        return Some(Message::Quit);
+    let ctrl = k.modifiers.contains(KeyModifiers::CONTROL);
+    match k.code {
+        // Ctrl-C quits from anywhere (asking first about unsaved edits; a second confirms).
+        KeyCode::Char('c') if ctrl => return Some(Message::Quit),
+        KeyCode::Char('z') if ctrl => return Some(Message::Suspend),
+        _ => {}
     }
     match &app.overlay {
         Overlay::None => keymap::lookup(k),
@@ -41,19 +44,22 @@ fn key(app: &App, k: &KeyEvent) -> Option<Message> {
             _ => None,
         },
         Overlay::Fault => match k.code {
-            // The fault box answers the recovery keys directly, so the advice it gives works.
-            KeyCode::Esc | KeyCode::Enter => Some(Message::Escape),
+            // The fault box answers the recovery keys directly, so the advice it gives works;
+            // other keys (digits typed for a value, say) are swallowed, not sent on.
+            KeyCode::Esc => Some(Message::Escape),
             _ => keymap::lookup(k).filter(|m| {
                 matches!(
                     m,
                     Message::Reset
                         | Message::Quit
+                        | Message::TogglePause
                         | Message::RestoreAll
-                        | Message::RestoreParam
+                        | Message::Undo
                         | Message::SelectNext
                         | Message::SelectPrev
                         | Message::Nudge { .. }
                         | Message::EditValue
+                        | Message::ToggleHelp
                 )
             }),
         },
@@ -61,6 +67,8 @@ fn key(app: &App, k: &KeyEvent) -> Option<Message> {
             KeyCode::Esc => Some(Message::Escape),
             KeyCode::Up | KeyCode::Char('k') => Some(Message::Move(-1)),
             KeyCode::Down | KeyCode::Char('j') => Some(Message::Move(1)),
+            KeyCode::PageUp | KeyCode::Home => Some(Message::Move(-100)),
+            KeyCode::PageDown | KeyCode::End => Some(Message::Move(100)),
             KeyCode::Enter => Some(Message::Submit),
             _ => None,
         },
@@ -73,13 +81,28 @@ fn key(app: &App, k: &KeyEvent) -> Option<Message> {
             KeyCode::Right => Some(Message::Move(1)),
             KeyCode::Home => Some(Message::Home),
             KeyCode::End => Some(Message::End),
-            KeyCode::Char(c) if !k.modifiers.contains(KeyModifiers::CONTROL) => {
-                Some(Message::Input(c))
-            }
+            KeyCode::Char('a') if ctrl => Some(Message::Home),
+            KeyCode::Char('e') if ctrl => Some(Message::End),
+            KeyCode::Char('u') if ctrl => Some(Message::KillToStart),
+            KeyCode::Char('k') if ctrl => Some(Message::KillToEnd),
+            KeyCode::Char('w') if ctrl => Some(Message::KillWord),
+            KeyCode::Char('h') if ctrl => Some(Message::Backspace),
+            KeyCode::Char('b') if ctrl => Some(Message::Move(-1)),
+            KeyCode::Char('f') if ctrl => Some(Message::Move(1)),
+            KeyCode::Char(c) if !ctrl => Some(Message::Input(c)),
             _ => None,
         },
-        Overlay::ConfirmOverwrite(_) => match k.code {
+        Overlay::ConfirmOverwrite(_) | Overlay::ConfirmBig(_) => match k.code {
             KeyCode::Char('y' | 'Y') => Some(Message::Answer(true)),
+            KeyCode::Char('n' | 'N') | KeyCode::Esc => Some(Message::Answer(false)),
+            _ => None,
+        },
+        Overlay::ConfirmDiscard(then) => match k.code {
+            KeyCode::Char('y' | 'Y') | KeyCode::Enter => Some(Message::Answer(true)),
+            // The key that asked, pressed again, confirms.
+            KeyCode::Char('q') if *then == Then::Quit => Some(Message::Quit),
+            KeyCode::Char('o') if *then == Then::Open => Some(Message::OpenPicker),
+            KeyCode::Char('S') => Some(Message::Save),
             KeyCode::Char('n' | 'N') | KeyCode::Esc => Some(Message::Answer(false)),
             _ => None,
         },

@@ -145,17 +145,24 @@ pub const KEYMAP: &[Binding] = &[
     },
     Binding {
         keys: &[ch('q'), ctrl('c')],
-        help: "quit (Esc too, when nothing is open)",
+        help: "quit (asks first when there are unsaved edits)",
         footer: Some(("q", "quit")),
         group: Group::General,
         message: Message::Quit,
     },
     Binding {
         keys: &[key(KeyCode::Esc)],
-        help: "close the overlay or prompt; else quit",
+        help: "close the box or prompt that is open",
         footer: None,
         group: Group::General,
         message: Message::Escape,
+    },
+    Binding {
+        keys: &[ctrl('z')],
+        help: "suspend to the shell (fg brings it back)",
+        footer: None,
+        group: Group::General,
+        message: Message::Suspend,
     },
     Binding {
         keys: &[ch(' '), ch('p')],
@@ -208,7 +215,7 @@ pub const KEYMAP: &[Binding] = &[
     },
     Binding {
         keys: &[key(KeyCode::Left), ch('h')],
-        help: "decrease (ks, density: / 2^(1/4); flip toggles)",
+        help: "decrease (ks, density: /2^(1/4); flip toggle)",
         footer: None,
         group: Group::Parameters,
         message: Message::Nudge {
@@ -255,14 +262,14 @@ pub const KEYMAP: &[Binding] = &[
     },
     Binding {
         keys: &[ch('u')],
-        help: "restore the scene's value",
+        help: "undo the last edit (again: the one before)",
         footer: Some(("u", "undo")),
         group: Group::Parameters,
-        message: Message::RestoreParam,
+        message: Message::Undo,
     },
     Binding {
         keys: &[ch('U')],
-        help: "restore all parameters to the scene's",
+        help: "restore every parameter to the scene's value",
         footer: None,
         group: Group::Parameters,
         message: Message::RestoreAll,
@@ -315,6 +322,13 @@ pub const KEYMAP: &[Binding] = &[
         footer: None,
         group: Group::Views,
         message: Message::ToggleColor,
+    },
+    Binding {
+        keys: &[ch('M')],
+        help: "mouse capture on / off (off: select text)",
+        footer: None,
+        group: Group::Views,
+        message: Message::ToggleMouse,
     },
     Binding {
         keys: &[ch('a')],
@@ -409,6 +423,16 @@ pub fn keys_label(b: &Binding) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn help_lines_are_short_enough_for_two_columns_at_120_columns() {
+        // Two columns of "  KEYS     help" with a gap of 4 and a border fit 120 columns when
+        // no help is longer than 46 characters (key labels take 7).
+        for b in KEYMAP {
+            assert!(b.help.chars().count() <= 46, "{:?} is too long", b.help);
+            assert!(keys_label(b).chars().count() <= 7, "{:?}", keys_label(b));
+        }
+    }
 
     #[test]
     fn no_key_is_bound_twice() {

@@ -4,7 +4,7 @@
 use ratatui::layout::{Constraint, Direction, Layout as Split, Rect};
 
 use super::model::App;
-use super::params::row_count;
+use super::params::{row, row_count};
 
 /// The smallest terminal the layout fits, columns.
 pub const MIN_WIDTH: u16 = 60;
@@ -33,10 +33,12 @@ pub fn regions(app: &App, area: Rect) -> Option<Regions> {
     if area.width < MIN_WIDTH || area.height < MIN_HEIGHT {
         return None;
     }
+    // A long message wraps onto up to three lines rather than being cut.
+    let note_h = super::view::note_lines(app, area.width).min(3);
     let rows = Split::vertical([
         Constraint::Length(1),
         Constraint::Min(1),
-        Constraint::Length(1),
+        Constraint::Length(note_h),
         Constraint::Length(1),
     ])
     .split(area);
@@ -46,9 +48,21 @@ pub fn regions(app: &App, area: Rect) -> Option<Regions> {
     let cols = Split::horizontal([Constraint::Min(1), Constraint::Length(panel_w)]).split(body);
     let (mut views, right) = (cols[0], cols[1]);
 
-    // Rows, border and the selected parameter's help (two lines) when there is room.
-    let wanted = row_count(&app.sim) as u16 + 2;
-    let with_help = wanted + 2;
+    // Rows, border and the selected parameter's help when there is room: a blank line, then
+    // as many lines as the longest help takes wrapped, so none is cut (the active solver's
+    // option rows included).
+    let count = row_count(&app.sim);
+    let wanted = count as u16 + 2;
+    let help_rows = (0..count)
+        .map(|i| {
+            wrapped_rows(
+                row(&app.sim, i).help,
+                usize::from(panel_w.saturating_sub(2)),
+            )
+        })
+        .max()
+        .unwrap_or(1) as u16;
+    let with_help = wanted + 1 + help_rows;
     let params_h = if right.height >= with_help + 8 {
         with_help
     } else {
@@ -103,6 +117,39 @@ pub fn regions(app: &App, area: Rect) -> Option<Regions> {
         note,
         footer,
     })
+}
+
+/// Rows `text` takes when word-wrapped at `width` columns (greedy, as ratatui wraps; a word
+/// longer than a line is broken).
+pub fn wrapped_rows(text: &str, width: usize) -> usize {
+    if width == 0 {
+        return 0;
+    }
+    let mut rows = 1;
+    let mut used = 0;
+    for word in text.split_whitespace() {
+        let w = word.chars().count();
+        let need = if used == 0 { w } else { used + 1 + w };
+        if need <= width {
+            used = need;
+        } else if w <= width {
+            rows += 1;
+            used = w;
+        } else {
+            // Broken across lines.
+            let start = if used == 0 { 0 } else { used + 1 };
+            let total = start + w;
+            if used > 0 && start >= width {
+                rows += 1;
+                rows += (w - 1) / width;
+                used = (w - 1) % width + 1;
+            } else {
+                rows += (total - 1) / width;
+                used = (total - 1) % width + 1;
+            }
+        }
+    }
+    rows
 }
 
 /// The inside of a bordered pane (where the cloth is drawn).

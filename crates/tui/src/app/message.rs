@@ -1,17 +1,19 @@
 //! Everything that can happen to the app, as data.
 
-use std::time::Duration;
-
 /// One thing that happened: a key's meaning, a mouse gesture, a resize, time passing.
 ///
 /// Keys become messages in one place ([`super::input`]); [`super::update()`] is the only code
 /// that changes the model.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Message {
-    /// Leave the app.
+    /// Leave the app (asking first when there are unsaved edits; a second one confirms).
     Quit,
-    /// Close the open overlay or prompt; quit when nothing is open.
+    /// Close the open box or prompt; nothing else.
     Escape,
+    /// Stop the app for the shell (Ctrl-Z); `fg` brings it back.
+    Suspend,
+    /// Capture the mouse (orbit drag, wheel) or leave it to the terminal (text selection).
+    ToggleMouse,
     /// Show or hide the key help.
     ToggleHelp,
     /// Pause or resume the simulation.
@@ -37,8 +39,8 @@ pub enum Message {
     },
     /// Type an exact value for the selected parameter.
     EditValue,
-    /// Put the selected parameter back to the scene's value.
-    RestoreParam,
+    /// Take back the last edit.
+    Undo,
     /// Put every parameter back to the scene's values.
     RestoreAll,
     /// Cycle single / two / four panes.
@@ -76,6 +78,12 @@ pub enum Message {
     Backspace,
     /// Delete the character at the prompt's cursor.
     Delete,
+    /// Delete from the prompt's cursor back to the start of the line (Ctrl-U).
+    KillToStart,
+    /// Delete from the prompt's cursor to the end of the line (Ctrl-K).
+    KillToEnd,
+    /// Delete the word before the prompt's cursor (Ctrl-W).
+    KillWord,
     /// Move the prompt's cursor or the picker's selection left / up (-1) or right / down (+1).
     Move(i32),
     /// The prompt's cursor to the start.
@@ -118,8 +126,10 @@ pub enum Message {
         /// Rows.
         height: u16,
     },
-    /// Wall-clock time passed; a running simulation owes this much (times the rate).
-    Tick(Duration),
+    /// Wall-clock time passed; a simulation stepped inline owes this much (times the rate).
+    /// The live app steps on a worker, which keeps its own clock; tests step inline.
+    #[cfg(test)]
+    Tick(std::time::Duration),
     /// Fresh measurements from the app loop.
     Measured(super::model::Stats),
 }

@@ -4,7 +4,9 @@ use std::path::PathBuf;
 
 use cloth_render::{AsciiFrame, Bounds, ColorDepth, Mode, Orbit, Renderer, View};
 
-use super::sim::Simulation;
+use super::params::Settings;
+use super::sim::{Command, Simulation};
+use super::worker::{Rates, Worker};
 
 /// How many panes show the cloth.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -89,6 +91,8 @@ pub struct Prompt {
     pub cursor: usize,
     /// Why the last submission was refused.
     pub error: Option<String>,
+    /// Whether the whole text is selected (as pre-filled): typing replaces it.
+    pub selected: bool,
 }
 
 impl Prompt {
@@ -99,6 +103,16 @@ impl Prompt {
             cursor: text.chars().count(),
             text,
             error: None,
+            selected: false,
+        }
+    }
+
+    /// A prompt pre-filled with `text`, all of it selected: typing replaces it, a cursor key
+    /// keeps it for editing.
+    pub fn prefilled(purpose: Purpose, text: String) -> Self {
+        Self {
+            selected: !text.is_empty(),
+            ..Self::new(purpose, text)
         }
     }
 }
@@ -117,8 +131,21 @@ pub enum Overlay {
     Prompt(Prompt),
     /// "Overwrite this file?"
     ConfirmOverwrite(PathBuf),
+    /// "Discard the unsaved edits?" before what would drop them.
+    ConfirmDiscard(Then),
+    /// "This cloth of so many points is big: open it?" (the scene waits in [`App::big`])
+    ConfirmBig(usize),
     /// The simulation stopped itself; the message says why and how to recover.
     Fault,
+}
+
+/// What a discard question leads to when answered yes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Then {
+    /// Leave the app.
+    Quit,
+    /// Open the scene picker.
+    Open,
 }
 
 /// The scene picker: bundled scenes, then the scene files in the working folder, then
@@ -141,18 +168,12 @@ impl Picker {
 /// Measurements of the app loop over the last second or so.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Stats {
-    /// Simulated seconds per wall second actually achieved.
-    pub realtime_factor: f64,
-    /// Solver steps per wall second.
-    pub steps_per_sec: f64,
+    /// The simulation's rates (measured by whoever steps it).
+    pub rates: Rates,
     /// Frames drawn per wall second.
     pub draws_per_sec: f64,
-    /// Whether the simulation could not keep up and dropped owed time.
-    pub lagging: bool,
     /// Wall time per drawn frame (render + draw + write), ms.
     pub draw_ms: f64,
-    /// Wall time the simulation may use per loop turn, ms.
-    pub budget_ms: f64,
 }
 
 /// What to show in each pane slot at start: side and top first (the two-pane default).
@@ -174,6 +195,9 @@ pub const RATES: [f64; 9] = [
 /// Index of 1x in [`RATES`].
 pub const RATE_ONE: usize = 4;
 
+/// A callback a worker calls when it has published.
+pub type Notify = std::sync::Arc<dyn Fn() + Send + Sync>;
+
 /// The whole app.
 pub struct App {
     /// The cloth.
@@ -182,7 +206,7 @@ pub struct App {
     pub running: bool,
     /// Index into [`RATES`].
     pub rate: usize,
-    /// Simulated seconds owed to the simulation by the wall clock.
+    /// Simulated seconds owed when the cloth is stepped inline (tests; the worker keeps its own).
     pub debt: f64,
     /// Selected parameter row.
     pub selected: usize,
@@ -221,10 +245,30 @@ pub struct App {
     pub frames: [Option<AsciiFrame>; 4],
     /// The renderer's scratch buffers, reused frame to frame.
     pub renderer: Renderer,
+    /// The coarser grid a big cloth is drawn through (`None`: drawn as it is).
+    pub display: Option<super::panes::Display>,
     /// Last mouse position while dragging in an orbit pane.
     pub drag: Option<(u16, u16)>,
     /// Set by quit.
     pub quit: bool,
+    /// Set by Ctrl-Z: the loop suspends the app (and clears it).
+    pub suspend: bool,
+    /// Whether the mouse is captured (wheel and drag work; the terminal cannot select text).
+    pub mouse: bool,
+    /// Edits that `u` takes back, newest last: the settings and the solver's name before each.
+    pub undo: Vec<(Settings, &'static str)>,
+    /// The settings and solver last opened or saved: edits past them are unsaved.
+    pub saved: (Settings, &'static str),
+    /// Say where the cloth is once the single frame asked for arrives.
+    pub step_note: bool,
+    /// A scene waiting for the answer to "this cloth is big: open it?".
+    pub big: Option<Box<cloth_scene::Scene>>,
+    /// How a worker tells the loop it has something new (set by the loop; `None` in tests).
+    pub notify: Option<Notify>,
+    /// The thread stepping the cloth; `None` steps it inline (tests, and the fallback).
+    pub worker: Option<Worker>,
+    /// What the worker was last told, so an edit is sent once.
+    pub sent: (Settings, &'static str),
     /// Scenes the picker offers to open a file from, and where save writes by default.
     pub cwd: PathBuf,
 }
@@ -232,8 +276,19 @@ pub struct App {
 impl App {
     /// A new app on `sim`, running or paused.
     pub fn new(sim: Simulation, running: bool) -> Self {
-        let orbit = Orbit::course_default(&sim.scene.mesh);
+        let orbit = Orbit::framing(&sim.scene.mesh, &sim.scene.colliders);
+        let saved = (sim.settings.clone(), sim.entry().name());
+        let display = super::panes::Display::for_mesh(&sim.scene.mesh);
         Self {
+            sent: saved.clone(),
+            saved,
+            undo: Vec::new(),
+            suspend: false,
+            mouse: true,
+            step_note: false,
+            worker: None,
+            notify: None,
+            big: None,
             sim,
             running,
             rate: RATE_ONE,
@@ -255,10 +310,73 @@ impl App {
             stats: Stats::default(),
             screen: (80, 24),
             frames: [None, None, None, None],
+            display,
             renderer: Renderer::new(),
             drag: None,
             quit: false,
             cwd: PathBuf::from("."),
+        }
+    }
+
+    /// Whether the live settings or solver differ from what was last opened or saved.
+    pub fn unsaved(&self) -> bool {
+        self.sim.settings != self.saved.0 || self.sim.entry().name() != self.saved.1
+    }
+
+    /// Tells the simulation's stepper: the worker when there is one, else the simulation
+    /// itself at once (whose errors are returned).
+    pub fn send(&mut self, command: Command) -> Result<(), String> {
+        match &self.worker {
+            Some(w) => {
+                w.send(command);
+                Ok(())
+            }
+            None => self.sim.apply(command),
+        }
+    }
+
+    /// Moves the stepping of the cloth to a worker thread (replacing any worker), starting
+    /// from the start positions with the live settings and solver.
+    ///
+    /// # Errors
+    /// When the solver cannot be built or the thread cannot start.
+    pub fn start_worker(&mut self, notify: Notify) -> anyhow::Result<()> {
+        let mut sim = Simulation::new(
+            self.sim.scene.clone(),
+            self.sim.registry().clone(),
+            Some(self.sim.entry().name()),
+        )?;
+        sim.settings.clone_from(&self.sim.settings);
+        // The live solver options may differ from the scene's: build with the live ones.
+        sim.apply_options()?;
+        let n = std::sync::Arc::clone(&notify);
+        self.worker = Some(Worker::spawn(
+            sim,
+            self.running,
+            self.rate(),
+            Box::new(move || n()),
+        )?);
+        self.sent = (self.sim.settings.clone(), self.sim.entry().name());
+        self.notify = Some(notify);
+        Ok(())
+    }
+
+    /// Sends the worker the live settings and solver if they changed since last sent.
+    pub fn sync(&mut self) {
+        let Some(w) = &self.worker else {
+            return;
+        };
+        // NOTE: the solver goes first: the options in the settings are the new solver's, and
+        // the worker's solver switch resets them to the scene's, which the settings then set.
+        let name = self.sim.entry().name();
+        if name != self.sent.1 {
+            self.sent.1 = name;
+            w.send(Command::Solver(name.to_owned()));
+            self.sent.0.clone_from(&self.sim.settings);
+            w.send(Command::Settings(self.sim.settings.clone()));
+        } else if self.sim.settings != self.sent.0 {
+            self.sent.0.clone_from(&self.sim.settings);
+            w.send(Command::Settings(self.sim.settings.clone()));
         }
     }
 

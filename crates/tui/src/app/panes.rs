@@ -1,16 +1,83 @@
 //! The cloth panes: render each visible pane with `cloth-render` into the model (before the
 //! pure view draws), and the widget that copies an [`AsciiFrame`] into a ratatui buffer.
+//!
+//! A big cloth is drawn through a [`Display`]: a coarser grid whose points are a subset of the
+//! cloth's, so drawing costs the same at 2048 x 2048 as at 128 x 128 (a pane has far fewer
+//! pixels than that grid has points) and the keyboard is never kept waiting by a draw.
 
 use cloth_render::{
-    AsciiFrame, Bounds, ColorDepth, Extent, FrameSize, RenderOptions, Rgb, View, ViewSpec,
+    AsciiFrame, Bounds, ColorDepth, Extent, FrameSize, RenderOptions, Rgb, TermColor, View,
+    ViewSpec,
 };
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::style::Color;
 use ratatui::widgets::Widget;
 
+use cloth_mesh::{ClothMesh, ClothState, GridSpec};
+
 use super::layout::{self, inner};
 use super::model::{App, Level};
+
+/// Most points per side drawn; a bigger cloth is drawn through a [`Display`].
+///
+/// NOTE: a braille pane of 100 x 40 cells has 200 x 160 pixels, about what a grid of 128 points
+/// a side covers with a triangle each, and drawing two panes of it leaves a key waiting at most
+/// a few milliseconds.
+pub const DISPLAY_SIDE: usize = 128;
+
+/// A coarser copy of a big cloth for drawing: every k-th point (the edges and corners
+/// included), with the pins moved to their nearest drawn point.
+pub struct Display {
+    /// The coarse grid.
+    pub mesh: ClothMesh,
+    /// The cloth's index of each coarse point.
+    pick: Vec<usize>,
+    /// The coarse grid's positions, gathered from the cloth's.
+    pub state: ClothState,
+}
+
+impl Display {
+    /// The display grid for `full`, or `None` when it is small enough to draw as it is.
+    pub fn for_mesh(full: &ClothMesh) -> Option<Self> {
+        let (nw, nh) = (full.nw(), full.nh());
+        if nw <= DISPLAY_SIDE && nh <= DISPLAY_SIDE {
+            return None;
+        }
+        let (mw, mh) = (nw.min(DISPLAY_SIDE), nh.min(DISPLAY_SIDE));
+        // Coarse index i to the cloth's, and back to the nearest coarse index.
+        let to_full = |i: usize, m: usize, n: usize| i * (n - 1) / (m - 1);
+        let to_coarse = |k: usize, m: usize, n: usize| (k * (m - 1) + (n - 1) / 2) / (n - 1);
+        let spec = full.spec();
+        let pinned = spec
+            .pinned
+            .iter()
+            .map(|&(x, y)| (to_coarse(x, mw, nw), to_coarse(y, mh, nh)))
+            .collect();
+        let coarse = GridSpec {
+            num_width_points: mw,
+            num_height_points: mh,
+            pinned,
+            ..spec.clone()
+        };
+        let mesh = ClothMesh::new(&coarse).ok()?;
+        let pick = (0..mh)
+            .flat_map(|y| (0..mw).map(move |x| (x, y)))
+            .map(|(x, y)| full.index(to_full(x, mw, nw), to_full(y, mh, nh)))
+            .collect();
+        let state = ClothState::new(&mesh);
+        Some(Self { mesh, pick, state })
+    }
+
+    /// Gathers the drawn points' positions from the cloth's.
+    pub fn update(&mut self, positions: &[cloth_solver::Vec3]) {
+        for (p, &k) in self.state.positions.iter_mut().zip(&self.pick) {
+            if let Some(q) = positions.get(k) {
+                *p = *q;
+            }
+        }
+    }
+}
 
 /// Renders every visible pane at its current size into `app.frames`.
 ///
@@ -20,10 +87,17 @@ pub fn prepare(app: &mut App, area: Rect) {
     let Some(regions) = layout::regions(app, area) else {
         return;
     };
+    if let Some(d) = &mut app.display {
+        d.update(&app.sim.state.positions);
+    }
     let sim = &app.sim;
+    let (mesh, state) = match &app.display {
+        Some(d) => (&d.mesh, &d.state),
+        None => (&sim.scene.mesh, &sim.state),
+    };
     // NOTE: a non-finite state never reaches here (the simulation puts back its last good
     // frame); should one, the old extent stays.
-    if let Ok(b) = Bounds::of_scene(&sim.state.positions, &sim.settings.colliders) {
+    if let Ok(b) = Bounds::of_scene(&state.positions, &sim.settings.colliders) {
         app.extent = Some(app.extent.map_or(b, |e| e.union(&b)));
     }
     let options = RenderOptions {
@@ -31,6 +105,7 @@ pub fn prepare(app: &mut App, area: Rect) {
         color: app.color,
         ..RenderOptions::default()
     };
+    let mut errors = Vec::new();
     for (slot, rect) in regions.panes {
         let inside = inner(rect);
         let Ok(size) = FrameSize::new(inside.width as usize, inside.height as usize) else {
@@ -38,7 +113,7 @@ pub fn prepare(app: &mut App, area: Rect) {
             continue;
         };
         let view = app.views[slot];
-        let mut spec = ViewSpec::new(view, &app.sim.scene.mesh);
+        let mut spec = ViewSpec::new(view, mesh);
         spec.orbit = app.orbit;
         if view != View::Orbit
             && let Some(e) = app.extent
@@ -49,17 +124,16 @@ pub fn prepare(app: &mut App, area: Rect) {
         if frame.size() != size {
             frame.resize(size);
         }
-        if let Err(e) = app.renderer.render(
-            &app.sim.scene.mesh,
-            &app.sim.state,
-            &app.sim.settings.colliders,
-            &spec,
-            &options,
-            frame,
-        ) {
+        if let Err(e) =
+            app.renderer
+                .render(mesh, state, &sim.settings.colliders, &spec, &options, frame)
+        {
             app.frames[slot] = None;
-            app.say(Level::Error, format!("cannot draw pane {}: {e}", slot + 1));
+            errors.push(format!("cannot draw pane {}: {e}", slot + 1));
         }
+    }
+    for e in errors {
+        app.say(Level::Error, e);
     }
 }
 
@@ -77,26 +151,36 @@ impl<'a> AsciiView<'a> {
     }
 }
 
-/// The colour a terminal of `depth` is told: 24-bit as is, otherwise the nearest entry of the
-/// xterm 6 x 6 x 6 colour cube (which 16-colour terminals also map to their palette).
+/// The colour a terminal of `depth` is told, by the renderer's one conversion: 24-bit as
+/// is, else the nearest palette entry (the 16 basic colours are named, so a 16-colour
+/// terminal gets basic codes).
 fn terminal_color(c: Rgb, depth: ColorDepth) -> Color {
-    match depth {
-        ColorDepth::TrueColor | ColorDepth::None => Color::Rgb(c.0, c.1, c.2),
-        ColorDepth::Ansi256 | ColorDepth::Ansi16 => {
-            // Cube levels are 0, 95, 135, 175, 215, 255: level i >= 1 sits at 55 + 40 i.
-            let level = |v: u8| -> u8 {
-                if v < 48 {
-                    0
-                } else if v < 115 {
-                    1
-                } else {
-                    ((u16::from(v) - 35) / 40).min(5) as u8
-                }
-            };
-            Color::Indexed(16 + 36 * level(c.0) + 6 * level(c.1) + level(c.2))
-        }
+    match depth.quantise(c) {
+        TermColor::Basic(i) => BASIC[usize::from(i).min(15)],
+        TermColor::Indexed(i) => Color::Indexed(i),
+        TermColor::Rgb(Rgb(r, g, b)) => Color::Rgb(r, g, b),
     }
 }
+
+/// ratatui's names of the 16 basic colours, in SGR order.
+const BASIC: [Color; 16] = [
+    Color::Black,
+    Color::Red,
+    Color::Green,
+    Color::Yellow,
+    Color::Blue,
+    Color::Magenta,
+    Color::Cyan,
+    Color::Gray,
+    Color::DarkGray,
+    Color::LightRed,
+    Color::LightGreen,
+    Color::LightYellow,
+    Color::LightBlue,
+    Color::LightMagenta,
+    Color::LightCyan,
+    Color::White,
+];
 
 impl Widget for AsciiView<'_> {
     fn render(self, area: Rect, buf: &mut Buffer) {

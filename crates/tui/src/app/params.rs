@@ -480,9 +480,15 @@ impl Param {
                 let v: f64 = t.parse().map_err(|_| {
                     format!("{}: {t:?} is not a number; enter {allowed}", self.label)
                 })?;
-                if !v.is_finite() || v < min || v > max || (integer && v.fract() != 0.0) {
+                if !v.is_finite() || v < min || v > max {
                     return Err(format!(
                         "{}: {t} is out of range; enter {allowed}",
+                        self.label
+                    ));
+                }
+                if integer && v.fract() != 0.0 {
+                    return Err(format!(
+                        "{}: {t} is not a whole number; enter {allowed}",
                         self.label
                     ));
                 }

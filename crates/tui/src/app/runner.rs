@@ -1,118 +1,128 @@
-//! The app loop: the only place that reads the clock or touches the terminal.
+//! The app loop: the only place that touches the terminal, reads the wall clock for drawing,
+//! and handles signals.
 //!
-//! Each turn: wait for input until the next frame is due, turn events into messages, give the
-//! simulation the wall time that passed (it owes `wall * rate` simulated seconds, paid in fixed
-//! steps of `dt`), run owed steps for at most the budget of a frame interval and forgive the
-//! rest (the status line then shows a real-time factor below 1), and draw if anything changed
-//! and a frame is due. So however slow the simulation, input and drawing keep their pace.
+//! Three sources feed one channel: a thread reading terminal events, a thread receiving
+//! signals, and the simulation's worker saying it has a new snapshot. The loop waits on the
+//! channel (or until a frame or a held Esc is due), so a key is answered as soon as it
+//! arrives whatever the cloth's size: the loop itself only renders and draws.
 //!
-//! The budget adapts: it is the frame interval minus what drawing measurably costs (with a
-//! margin for input), between [`MIN_BUDGET`] and [`MAX_BUDGET`] of the interval. A fixed 55 %
-//! would waste idle time when drawing is cheap (pinned4's solver alone needs about two
-//! thirds of real time on one core), and starve drawing when it is not.
+//! However it ends (quit, error, a terminal that went away, SIGTERM, SIGINT, SIGHUP, SIGQUIT,
+//! a panic) the terminal is restored first. Ctrl-Z and SIGTSTP leave the terminal as the shell
+//! wants it and stop the process; on SIGCONT the loop enters it again and redraws.
 
-use std::io::stdout;
+use std::io;
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
-use ratatui::DefaultTerminal;
-use ratatui::crossterm::event::{self, DisableMouseCapture, EnableMouseCapture};
+use ratatui::crossterm::event::{self, Event};
+use ratatui::crossterm::execute;
 use ratatui::crossterm::terminal::{BeginSynchronizedUpdate, EndSynchronizedUpdate};
-use ratatui::crossterm::{execute, queue};
 use ratatui::layout::Rect;
 
+use super::escape::Joiner;
 use super::model::{App, Stats};
+use super::terminal::{self, Session};
 use super::{Message, input, panes, update, view};
 
-/// Smallest share of a frame interval the simulation gets.
-pub const MIN_BUDGET: f64 = 0.3;
-/// Largest share of a frame interval the simulation gets; the rest is always left for input
-/// and drawing.
-pub const MAX_BUDGET: f64 = 0.8;
-/// Wall time kept free for reading input and for jitter, besides the measured drawing cost.
-const MARGIN: Duration = Duration::from_millis(2);
-
-/// How often the measurements refresh.
+/// How often the drawing rate refreshes.
 const WINDOW: Duration = Duration::from_secs(1);
 
-/// How long to sleep waiting for input when nothing is running or pending.
+/// Longest wait for an event when nothing is due.
 const IDLE: Duration = Duration::from_millis(500);
 
-/// Runs `app` in the terminal at most `fps` frames per second; restores the terminal however
-/// it ends (a panic too: ratatui's hook restores it, ours releases the mouse first).
-pub fn run(mut app: App, fps: u32) -> anyhow::Result<()> {
-    let mut terminal = match ratatui::try_init() {
-        Ok(t) => t,
-        Err(e) => {
-            ratatui::restore();
-            return Err(e).context("cannot set up the terminal");
-        }
-    };
-    let previous = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        let _ = execute!(stdout(), DisableMouseCapture);
-        previous(info);
-    }));
-    let result = execute!(stdout(), EnableMouseCapture)
-        .context("cannot enable the mouse")
-        .and_then(|()| event_loop(&mut terminal, &mut app, fps));
-    let _ = execute!(stdout(), DisableMouseCapture);
-    ratatui::restore();
-    result
+/// What woke the loop.
+enum Wake {
+    /// A terminal event, or the error reading it (the terminal is gone).
+    Input(io::Result<Event>),
+    /// A signal arrived.
+    Signal(i32),
+    /// The worker published a snapshot.
+    Snapshot,
 }
 
-/// Measurements over a window of wall time.
+/// How the loop ended.
+enum End {
+    /// The user quit.
+    Quit,
+    /// A terminating signal: the process ends as that signal would have ended it.
+    Signal(i32),
+}
+
+/// Runs `app` in the terminal, drawing at most `fps` frames a second; restores the terminal
+/// however it ends.
+///
+/// # Errors
+/// When the terminal cannot be set up or fails, or the simulation's thread cannot start.
+pub fn run(mut app: App, fps: u32) -> anyhow::Result<()> {
+    let (tx, rx) = mpsc::channel();
+    let signals = signals::watch(tx.clone()).context("cannot watch for signals")?;
+    let notify_tx = std::sync::Mutex::new(tx.clone());
+    app.start_worker(std::sync::Arc::new(move || {
+        if let Ok(tx) = notify_tx.lock() {
+            let _ = tx.send(Wake::Snapshot);
+        }
+    }))?;
+    terminal::restore_on_panic();
+    let sixteen = app.depth == cloth_render::ColorDepth::Ansi16;
+    let mut session = Session::enter(app.mouse, sixteen).context("cannot set up the terminal")?;
+    spawn_input(tx).context("cannot read the keyboard")?;
+    let end = event_loop(&mut session, &mut app, fps, &rx);
+    session.leave();
+    drop(session);
+    signals.close();
+    match end? {
+        End::Quit => Ok(()),
+        End::Signal(sig) => {
+            // Worker threads end with the process; nothing to save.
+            signals::die_of(sig);
+            Ok(())
+        }
+    }
+}
+
+/// Reads terminal events on their own thread; a read error (the terminal closed) is sent
+/// too, and ends the thread.
+fn spawn_input(tx: Sender<Wake>) -> io::Result<()> {
+    std::thread::Builder::new()
+        .name("clothsim-input".to_owned())
+        .spawn(move || {
+            loop {
+                let ev = event::read();
+                let failed = ev.is_err();
+                if tx.send(Wake::Input(ev)).is_err() || failed {
+                    return;
+                }
+            }
+        })
+        .map(|_| ())
+}
+
+/// Drawing measurements over a window of wall time.
 struct Meter {
     start: Instant,
-    steps: u64,
-    sim_time: f64,
     draws: u32,
     draw_time: Duration,
-    lagging: bool,
 }
 
 impl Meter {
     fn new(now: Instant) -> Self {
         Self {
             start: now,
-            steps: 0,
-            sim_time: 0.0,
             draws: 0,
             draw_time: Duration::ZERO,
-            lagging: false,
         }
-    }
-
-    /// The stats when the window is over (and a new window).
-    fn take(&mut self, now: Instant, budget: Duration) -> Option<Stats> {
-        let wall = now.duration_since(self.start);
-        if wall < WINDOW {
-            return None;
-        }
-        let s = wall.as_secs_f64();
-        let stats = Stats {
-            realtime_factor: self.sim_time / s,
-            steps_per_sec: self.steps as f64 / s,
-            draws_per_sec: f64::from(self.draws) / s,
-            lagging: self.lagging,
-            draw_ms: if self.draws > 0 {
-                self.draw_time.as_secs_f64() * 1e3 / f64::from(self.draws)
-            } else {
-                0.0
-            },
-            budget_ms: budget.as_secs_f64() * 1e3,
-        };
-        *self = Self::new(now);
-        Some(stats)
     }
 }
 
-fn event_loop(terminal: &mut DefaultTerminal, app: &mut App, fps: u32) -> anyhow::Result<()> {
+fn event_loop(
+    session: &mut Session,
+    app: &mut App,
+    fps: u32,
+    rx: &Receiver<Wake>,
+) -> anyhow::Result<End> {
     let interval = Duration::from_secs_f64(1.0 / f64::from(fps));
-    let mut budget = interval.mul_f64(MAX_BUDGET);
-    // Smoothed cost of one draw (exponential average over about 8 frames).
-    let mut draw_cost = Duration::ZERO;
-    let size = terminal.size()?;
+    let size = session.terminal.size()?;
     update(
         app,
         Message::Resize {
@@ -120,76 +130,245 @@ fn event_loop(terminal: &mut DefaultTerminal, app: &mut App, fps: u32) -> anyhow
             height: size.height,
         },
     );
+    let mut joiner = Joiner::new();
     let mut dirty = true;
-    let mut last_tick = Instant::now();
-    let mut next_draw = last_tick;
-    let mut meter = Meter::new(last_tick);
+    // A key's answer is drawn at once, not at the next frame slot (which at `--fps 1` is up
+    // to a second away); only the cloth's motion waits for its slot.
+    let mut urgent = true;
+    let mut next_draw = Instant::now();
+    let mut meter = Meter::new(next_draw);
+    let mut mouse = app.mouse;
     loop {
         let now = Instant::now();
-        let timeout = if app.running || dirty {
-            next_draw.saturating_duration_since(now)
-        } else {
-            IDLE
+        let mut until = if dirty { next_draw } else { now + IDLE };
+        if urgent {
+            until = now;
+        }
+        if let Some(d) = joiner.deadline() {
+            until = until.min(d);
+        }
+        let first = match rx.recv_timeout(until.saturating_duration_since(now)) {
+            Ok(w) => Some(w),
+            Err(RecvTimeoutError::Timeout) => None,
+            Err(RecvTimeoutError::Disconnected) => anyhow::bail!("the event channel closed"),
         };
-        if event::poll(timeout)? {
-            loop {
-                let ev = event::read()?;
-                if let Some(m) = input::message(app, &ev) {
-                    update(app, m);
-                    dirty = true;
+        let mut events = Vec::new();
+        for wake in first.into_iter().chain(rx.try_iter()) {
+            match wake {
+                Wake::Input(Ok(ev)) => events.extend(joiner.push(ev, Instant::now())),
+                Wake::Input(Err(e)) => {
+                    return Err(e).context("the terminal went away");
                 }
-                if app.quit {
-                    return Ok(());
-                }
-                if !event::poll(Duration::ZERO)? {
-                    break;
+                Wake::Signal(sig) => match signals::meaning(sig) {
+                    signals::Meaning::Stop => {
+                        suspend(session)?;
+                        dirty = true;
+                        urgent = true;
+                    }
+                    signals::Meaning::Continue => {
+                        session.resume()?;
+                        dirty = true;
+                        urgent = true;
+                    }
+                    signals::Meaning::End => return Ok(End::Signal(sig)),
+                    signals::Meaning::Ignore => {}
+                },
+                Wake::Snapshot => {
+                    if update::adopt(app) {
+                        dirty = true;
+                    }
                 }
             }
         }
-
-        let now = Instant::now();
-        update(app, Message::Tick(now.duration_since(last_tick)));
-        last_tick = now;
-        let deadline = now + budget;
-        let before = app.sim.time;
-        let steps = update::run_owed(app, &mut || Instant::now() < deadline);
-        if steps > 0 || app.sim.fault.is_some() && app.overlay == super::model::Overlay::Fault {
+        events.extend(joiner.expire(Instant::now()));
+        for ev in &events {
+            if let Some(m) = input::message(app, ev) {
+                update(app, m);
+                dirty = true;
+                urgent = true;
+            }
+            if app.quit {
+                return Ok(End::Quit);
+            }
+        }
+        app.sync();
+        if app.suspend {
+            app.suspend = false;
+            suspend(session)?;
             dirty = true;
+            urgent = true;
         }
-        meter.steps += steps;
-        // A reset during the window makes time go back; count only forward progress.
-        meter.sim_time += (app.sim.time - before).max(0.0);
-        if app.running && app.debt >= app.sim.dt() {
-            // Out of budget: forgive the debt instead of letting it snowball.
-            app.debt = 0.0;
-            meter.lagging = true;
+        if app.mouse != mouse {
+            mouse = app.mouse;
+            session.set_mouse(mouse)?;
         }
-        if let Some(stats) = meter.take(now, budget)
-            && stats != app.stats
+        if let Some(w) = &app.worker
+            && !w.alive()
+            && app.sim.fault.is_none()
         {
-            update(app, Message::Measured(stats));
-            dirty = true;
+            anyhow::bail!("the simulation's thread stopped unexpectedly");
         }
 
         let now = Instant::now();
-        if dirty && now >= next_draw {
-            let size = terminal.size()?;
+        let span = now.duration_since(meter.start);
+        if span >= WINDOW {
+            let s = span.as_secs_f64();
+            let stats = Stats {
+                rates: app.stats.rates,
+                draws_per_sec: f64::from(meter.draws) / s,
+                draw_ms: if meter.draws > 0 {
+                    meter.draw_time.as_secs_f64() * 1e3 / f64::from(meter.draws)
+                } else {
+                    0.0
+                },
+            };
+            meter = Meter::new(now);
+            if stats != app.stats {
+                update(app, Message::Measured(stats));
+                dirty = true;
+            }
+        }
+
+        if dirty && (urgent || now >= next_draw) {
+            let size = session.terminal.size()?;
             panes::prepare(app, Rect::new(0, 0, size.width, size.height));
-            queue!(terminal.backend_mut(), BeginSynchronizedUpdate)?;
-            terminal.draw(|f| view(app, f))?;
-            execute!(terminal.backend_mut(), EndSynchronizedUpdate)?;
+            execute!(session.terminal.backend_mut(), BeginSynchronizedUpdate)?;
+            session.terminal.draw(|f| view(app, f))?;
+            execute!(session.terminal.backend_mut(), EndSynchronizedUpdate)?;
             dirty = false;
-            let cost = now.elapsed();
+            urgent = false;
             meter.draws += 1;
-            meter.draw_time += cost;
-            draw_cost = (draw_cost * 7 + cost) / 8;
-            budget = interval
-                .saturating_sub(draw_cost + MARGIN)
-                .clamp(interval.mul_f64(MIN_BUDGET), interval.mul_f64(MAX_BUDGET));
-            next_draw += interval;
+            meter.draw_time += now.elapsed();
+            next_draw = (next_draw + interval).max(now);
             if next_draw < now {
                 next_draw = now + interval;
             }
         }
+    }
+}
+
+/// Leaves the terminal and stops the process as SIGTSTP would; on `fg`, enters it again.
+fn suspend(session: &mut Session) -> anyhow::Result<()> {
+    session.leave();
+    signals::stop_self();
+    session
+        .resume()
+        .context("cannot set up the terminal again after a suspend")
+}
+
+/// Signals, on Unix through signal-hook: a thread forwards them to the loop's channel.
+#[cfg(unix)]
+mod signals {
+    use std::sync::mpsc::Sender;
+
+    use signal_hook::consts::{SIGCONT, SIGHUP, SIGINT, SIGQUIT, SIGTERM, SIGTSTP};
+    use signal_hook::iterator::{Handle, Signals};
+
+    use super::Wake;
+
+    /// What a signal asks of the loop.
+    pub enum Meaning {
+        /// Restore the terminal and stop (SIGTSTP).
+        Stop,
+        /// Enter the terminal again and redraw (SIGCONT).
+        Continue,
+        /// Restore the terminal and end (SIGTERM, SIGINT, SIGHUP, SIGQUIT).
+        End,
+        /// Nothing.
+        Ignore,
+    }
+
+    /// The meaning of `sig`.
+    pub fn meaning(sig: i32) -> Meaning {
+        match sig {
+            SIGTSTP => Meaning::Stop,
+            SIGCONT => Meaning::Continue,
+            SIGTERM | SIGINT | SIGHUP | SIGQUIT => Meaning::End,
+            _ => Meaning::Ignore,
+        }
+    }
+
+    /// The watching thread's handle; closing it ends the thread.
+    pub struct Watch(Handle);
+
+    impl Watch {
+        /// Stops watching.
+        pub fn close(&self) {
+            self.0.close();
+        }
+    }
+
+    /// Forwards the signals that concern the terminal to `tx`.
+    pub fn watch(tx: Sender<Wake>) -> std::io::Result<Watch> {
+        let mut signals = Signals::new([SIGTERM, SIGINT, SIGHUP, SIGQUIT, SIGTSTP, SIGCONT])?;
+        let handle = signals.handle();
+        std::thread::Builder::new()
+            .name("clothsim-signals".to_owned())
+            .spawn(move || {
+                for sig in signals.forever() {
+                    if tx.send(Wake::Signal(sig)).is_err() {
+                        return;
+                    }
+                }
+            })?;
+        Ok(Watch(handle))
+    }
+
+    /// Stops the process as SIGTSTP's default action would, until SIGCONT.
+    pub fn stop_self() {
+        let _ = signal_hook::low_level::emulate_default_handler(SIGTSTP);
+    }
+
+    /// Ends the process as `sig`'s default action would (the shell sees the signal).
+    pub fn die_of(sig: i32) {
+        let _ = signal_hook::low_level::emulate_default_handler(sig);
+        // Should the default action not end the process, end it with the shell's code for it.
+        std::process::exit(128 + sig);
+    }
+}
+
+/// Without Unix signals: nothing to watch, suspend or re-raise.
+#[cfg(not(unix))]
+mod signals {
+    use std::sync::mpsc::Sender;
+
+    use super::Wake;
+
+    /// What a signal asks of the loop.
+    pub enum Meaning {
+        /// Restore the terminal and stop.
+        Stop,
+        /// Enter the terminal again and redraw.
+        Continue,
+        /// Restore the terminal and end.
+        End,
+        /// Nothing.
+        Ignore,
+    }
+
+    /// No signals arrive here.
+    pub fn meaning(_sig: i32) -> Meaning {
+        Meaning::Ignore
+    }
+
+    /// Nothing to close.
+    pub struct Watch;
+
+    impl Watch {
+        /// Nothing to stop.
+        pub fn close(&self) {}
+    }
+
+    /// Nothing to watch.
+    pub fn watch(_tx: Sender<Wake>) -> std::io::Result<Watch> {
+        Ok(Watch)
+    }
+
+    /// Suspending is a Unix job-control feature.
+    pub fn stop_self() {}
+
+    /// Unreachable without signals.
+    pub fn die_of(sig: i32) {
+        std::process::exit(128 + sig);
     }
 }

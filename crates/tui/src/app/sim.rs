@@ -1,7 +1,8 @@
 //! The running cloth: scene, live settings, state, solver, simulated clock and diagnostics.
 //!
-//! Time here is simulated time only. The app loop decides how many steps to take from the wall
-//! clock; nothing in this module reads a clock, so the same calls give the same bits.
+//! Time here is simulated time only. Whoever steps it (a [`super::worker::Worker`], or a test)
+//! decides how many steps to take; nothing in this module reads a clock, so the same calls give
+//! the same bits. Each frame ends with the divergence guard ([`crate::guard`]).
 
 use std::collections::VecDeque;
 
@@ -11,23 +12,11 @@ use cloth_solver::{Registry, Solver, SolverEntry, kinetic_energy, max_stretch_ra
 use serde_json::Value;
 
 use super::params::Settings;
+use crate::guard::{Divergence, Guard};
 use crate::solvers::{self, Choice};
 
 /// Plot samples kept (one per simulated frame: 20 s at 90 frames/s).
 pub const HISTORY: usize = 1800;
-
-/// Fastest point speed, m/s, beyond which the run is called exploding.
-///
-/// NOTE: the bundled scenes span a few metres; a free fall from 10 m ends at
-/// sqrt(2 * 9.8 * 10) = 14 m/s, so 50 m/s is far beyond anything a settling cloth does, yet
-/// reached within a few steps by an unstable explicit integration (its error grows by a
-/// constant factor per step).
-pub const MAX_SPEED: f64 = 50.0;
-
-/// Largest spring length / rest length beyond which the run is called exploding. Cloth
-/// springs three times their rest length are no longer cloth; with the course's 10 % stretch
-/// limit on, this can only be reached when the limit is off.
-pub const MAX_STRETCH_RATIO: f64 = 3.0;
 
 /// One plot sample, taken at the end of each simulated frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,6 +36,33 @@ pub struct Fault {
     pub time: f64,
     /// What happened, in one sentence.
     pub what: String,
+    /// What to change, fitted to the cause and the settings at the time.
+    pub advice: String,
+    /// Whether going on from the last good frame makes sense (a runaway; not a NaN).
+    pub resumable: bool,
+}
+
+/// A change asked of a running simulation: what the UI sends to the thread that steps it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Command {
+    /// Run (simulated time at `rate` times the wall clock's) or pause.
+    Run {
+        /// Whether simulated time advances.
+        running: bool,
+        /// Simulated seconds per wall second.
+        rate: f64,
+    },
+    /// New live parameters and objects.
+    Settings(Settings),
+    /// Another solver of the registry, by name, with the options the scene gives it (the
+    /// motion carries over).
+    Solver(String),
+    /// Back to the start positions at rest.
+    Reset,
+    /// Pause, then exactly one frame.
+    StepFrame,
+    /// Go on after a stop, with the runaway test off until the next reset.
+    ResumeAnyway,
 }
 
 /// The running cloth.
@@ -78,6 +94,7 @@ pub struct Simulation {
     pub peak_kinetic: f64,
     /// Set when the run diverged or exploded; cleared by a reset.
     pub fault: Option<Fault>,
+    guard: Guard,
 }
 
 impl Simulation {
@@ -109,6 +126,7 @@ impl Simulation {
             history: VecDeque::with_capacity(HISTORY),
             peak_kinetic: 0.0,
             fault: None,
+            guard: Guard::new(),
         };
         sim.sample();
         Ok(sim)
@@ -223,7 +241,52 @@ impl Simulation {
         self.history.clear();
         self.peak_kinetic = 0.0;
         self.fault = None;
+        self.guard.rearm();
         self.sample();
+    }
+
+    /// Goes on from the last good frame after a stop, without the runaway test until the next
+    /// reset (the user judged the run honest). A non-finite state cannot go on.
+    ///
+    /// # Errors
+    /// When the stop was for non-finite values.
+    pub fn resume_anyway(&mut self) -> Result<(), String> {
+        match &self.fault {
+            Some(f) if !f.resumable => {
+                Err(format!("{}; it cannot go on: press r to reset", f.what))
+            }
+            _ => {
+                self.fault = None;
+                self.guard.allow_runaway();
+                Ok(())
+            }
+        }
+    }
+
+    /// Applies a command. `Run` is the stepping loop's business and changes nothing here.
+    ///
+    /// # Errors
+    /// A solver that cannot be built, or the fault of a frame stepped.
+    pub fn apply(&mut self, command: Command) -> Result<(), String> {
+        match command {
+            Command::Run { .. } => Ok(()),
+            Command::Settings(s) => {
+                let options_changed = s.options != self.settings.options;
+                self.settings = s;
+                if options_changed {
+                    self.apply_options().map_err(|e| format!("{e:#}"))
+                } else {
+                    Ok(())
+                }
+            }
+            Command::Solver(name) => self.set_solver(&name).map_err(|e| format!("{e:#}")),
+            Command::Reset => {
+                self.reset();
+                Ok(())
+            }
+            Command::StepFrame => self.step_frame().map_err(|f| f.what),
+            Command::ResumeAnyway => self.resume_anyway(),
+        }
     }
 
     /// One step of `dt`. On failure the state goes back to the last good frame and
@@ -243,7 +306,17 @@ impl Simulation {
             &mut self.state,
         );
         if let Err(e) = result {
-            return Err(self.fail(e.to_string()));
+            let fault = Fault {
+                time: self.time,
+                what: e.to_string(),
+                advice: Divergence::NonFinite.advice(
+                    &self.choice.entry,
+                    &self.settings.params,
+                    self.point_mass(),
+                ),
+                resumable: false,
+            };
+            return Err(self.stop(fault));
         }
         self.time += dt;
         self.steps += 1;
@@ -268,31 +341,16 @@ impl Simulation {
     }
 
     fn end_frame(&mut self) -> Result<(), Fault> {
-        let dt = self.dt();
-        let speed = self
-            .state
-            .positions
-            .iter()
-            .zip(&self.state.last)
-            .map(|(p, l)| (p - l).norm())
-            .fold(0.0, f64::max)
-            / dt;
+        let checked = self.guard.check_state(
+            &self.state,
+            &self.settings.params,
+            self.point_mass(),
+            self.time,
+        );
+        if let Err(d) = checked {
+            return Err(self.fail(&d));
+        }
         let sample = self.measure();
-        if !(speed.is_finite() && sample.kinetic.is_finite() && sample.stretch.is_finite()) {
-            return Err(self.fail("the cloth's state is no longer finite".to_owned()));
-        }
-        if speed > MAX_SPEED {
-            return Err(self.fail(format!(
-                "the cloth exploded: a point moves at {} m/s (more than {MAX_SPEED:.0} m/s)",
-                short(speed)
-            )));
-        }
-        if sample.stretch > MAX_STRETCH_RATIO {
-            return Err(self.fail(format!(
-                "the cloth exploded: a spring is stretched to {} times its rest length",
-                short(sample.stretch)
-            )));
-        }
         self.push(sample);
         self.last_good.clone_from(&self.state);
         Ok(())
@@ -319,14 +377,21 @@ impl Simulation {
         self.push(s);
     }
 
-    fn fail(&mut self, what: String) -> Fault {
+    fn fail(&mut self, d: &Divergence) -> Fault {
+        let fault = Fault {
+            time: self.time,
+            what: d.describe(),
+            advice: d.advice(&self.choice.entry, &self.settings.params, self.point_mass()),
+            resumable: matches!(d, Divergence::Runaway { .. }),
+        };
+        self.stop(fault)
+    }
+
+    fn stop(&mut self, fault: Fault) -> Fault {
         // NOTE: the failed state may hold NaN or huge values; drawing and plotting it would
         // show garbage, so the last good frame is put back (the user sees where it was).
         self.state.clone_from(&self.last_good);
-        let fault = Fault {
-            time: self.time,
-            what,
-        };
+        self.guard.clear();
         self.fault = Some(fault.clone());
         fault
     }
@@ -343,7 +408,7 @@ impl Simulation {
                 "ks {:.0} N/m is past {}'s stability limit of about {limit:.0} N/m at this density \
                  and step: expect it to blow up; lower ks, raise steps/frame or density",
                 p.ks,
-                capitalised(self.choice.entry.name())
+                crate::guard::capitalised(self.choice.entry.name())
             )
         })
     }
@@ -367,19 +432,64 @@ pub fn numeric_options(entry: &SolverEntry, options: &Value) -> Vec<f64> {
         .collect()
 }
 
-/// A solver's name as the start of a sentence's noun: `Verlet`.
-fn capitalised(name: &str) -> String {
-    let mut chars = name.chars();
-    chars
-        .next()
-        .map_or_else(String::new, |c| c.to_uppercase().chain(chars).collect())
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// A possibly huge number, readable: `123`, `4.6e12`.
-fn short(v: f64) -> String {
-    if v.abs() < 1.0e4 {
-        format!("{v:.1}")
-    } else {
-        format!("{v:.1e}")
+    fn pinned4(registry: Registry) -> Simulation {
+        let scene = cloth_scene::load("pinned4", &[]).unwrap();
+        Simulation::new(scene, registry, None).unwrap()
+    }
+
+    #[test]
+    fn new_settings_with_other_option_values_rebuild_the_solver_with_them() {
+        let mut sim = pinned4(crate::default_registry());
+        let entry = *sim.entry();
+        let (k, option) = entry
+            .options()
+            .iter()
+            .filter(|o| o.numeric().is_some())
+            .enumerate()
+            .next()
+            .expect("the default solver has a numeric option row");
+        let (min, max, default) = option.numeric().unwrap();
+        // Any other allowed value: the worker must build with what the UI sent, not keep its own.
+        let other = if default < max {
+            (default + 1.0).min(max)
+        } else {
+            min
+        };
+        let mut settings = sim.settings.clone();
+        settings.options[k] = other;
+        sim.apply(Command::Settings(settings)).unwrap();
+        assert_eq!(sim.settings.options[k], other);
+        assert_eq!(
+            sim.options().get(option.name).and_then(Value::as_f64),
+            Some(other),
+            "{}",
+            sim.options()
+        );
+        assert!(sim.step_frame().is_ok());
+    }
+
+    #[test]
+    fn a_solver_command_switches_by_name_and_an_unknown_name_keeps_the_solver() {
+        let registry = crate::default_registry();
+        let names: Vec<&str> = registry.names().collect();
+        let mut sim = pinned4(registry.clone());
+        let last = names[names.len() - 1];
+        sim.apply(Command::Solver(last.to_owned())).unwrap();
+        assert_eq!(sim.entry().name(), last);
+        // The options rows are the new solver's, as the scene gives them.
+        assert_eq!(
+            sim.settings.options,
+            numeric_options(sim.entry(), sim.options())
+        );
+        let err = sim
+            .apply(Command::Solver("no-such-solver".to_owned()))
+            .unwrap_err();
+        assert!(err.contains("no-such-solver"), "{err}");
+        assert_eq!(sim.entry().name(), last);
+        assert!(sim.step_frame().is_ok());
     }
 }

@@ -11,9 +11,9 @@ use ratatui::backend::TestBackend;
 use ratatui::crossterm::event::{Event, KeyCode, KeyEvent, KeyModifiers};
 use ratatui::layout::Rect;
 
-use super::model::Overlay;
+use super::model::{Overlay, Then};
 use super::params::PARAMS;
-use super::{App, Args, Message, build, input, panes, update, view};
+use super::{App, Args, Message, build_in, input, panes, update, view};
 
 fn app_with(scene: &str, paused: bool) -> App {
     let args = Args {
@@ -21,16 +21,45 @@ fn app_with(scene: &str, paused: bool) -> App {
         paused,
         ..Args::default()
     };
-    let mut app = build(&args, &crate::default_registry(), false).unwrap();
+    let mut app = build_in(
+        &args,
+        &crate::default_registry(),
+        false,
+        &cloth_render::ColorEnv::default(),
+    )
+    .unwrap();
     app.cwd = PathBuf::from("/nonexistent");
     app
 }
 
 /// Sends a key through the real input mapping, as the loop does.
 fn press(app: &mut App, code: KeyCode) {
-    let ev = Event::Key(KeyEvent::new(code, KeyModifiers::NONE));
+    press_with(app, code, KeyModifiers::NONE);
+}
+
+fn press_with(app: &mut App, code: KeyCode, mods: KeyModifiers) {
+    let ev = Event::Key(KeyEvent::new(code, mods));
     if let Some(m) = input::message(app, &ev) {
         update(app, m);
+    }
+}
+
+fn ctrl(app: &mut App, c: char) {
+    press_with(app, KeyCode::Char(c), KeyModifiers::CONTROL);
+}
+
+/// Moves the picker's selection to entry `index` (the list stops at its ends).
+fn pick(app: &mut App, index: usize) {
+    press(app, KeyCode::Home);
+    for _ in 0..index {
+        press(app, KeyCode::Down);
+    }
+}
+
+fn prompt_text(app: &App) -> String {
+    match &app.overlay {
+        Overlay::Prompt(p) => p.text.clone(),
+        other => panic!("expected a prompt, got {other:?}"),
     }
 }
 
@@ -77,6 +106,9 @@ fn nudging_ks_right_raises_it_by_a_log_step_without_a_reset() {
     assert_eq!(app.sim.state, moved);
     press(&mut app, KeyCode::Char('L'));
     assert!((app.sim.settings.params.ks - 2.0 * want).abs() < 1e-9);
+    // u takes back one edit at a time: first the coarse step, then the fine one.
+    press(&mut app, KeyCode::Char('u'));
+    assert!((app.sim.settings.params.ks - want).abs() < 1e-9);
     press(&mut app, KeyCode::Char('u'));
     assert_eq!(app.sim.settings.params.ks, 5000.0);
 }
@@ -200,15 +232,248 @@ fn density_is_edited_in_grams_per_square_centimetre() {
 }
 
 #[test]
-fn esc_closes_what_is_open_then_quits() {
+fn esc_closes_what_is_open_and_never_quits() {
     let mut app = app_with("pinned4", true);
     press(&mut app, KeyCode::Char('?'));
     assert_eq!(app.overlay, Overlay::Help);
     press(&mut app, KeyCode::Esc);
     assert_eq!(app.overlay, Overlay::None);
-    assert!(!app.quit);
     press(&mut app, KeyCode::Esc);
+    press(&mut app, KeyCode::Esc);
+    assert!(!app.quit);
+    // Nor after a prompt was accepted.
+    press(&mut app, KeyCode::Enter);
+    type_text(&mut app, "6000");
+    press(&mut app, KeyCode::Enter);
+    press(&mut app, KeyCode::Esc);
+    assert!(!app.quit);
+    assert_eq!(app.sim.settings.params.ks, 6000.0);
+}
+
+#[test]
+fn q_with_unsaved_edits_asks_and_a_second_q_quits() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Char('q'));
+    assert!(app.quit, "nothing edited: q quits at once");
+
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Right);
+    press(&mut app, KeyCode::Char('q'));
+    assert!(!app.quit);
+    assert_eq!(app.overlay, Overlay::ConfirmDiscard(Then::Quit));
+    press(&mut app, KeyCode::Esc);
+    assert_eq!(app.overlay, Overlay::None);
+    assert!(!app.quit, "Esc keeps editing");
+    ctrl(&mut app, 'c');
+    assert_eq!(
+        app.overlay,
+        Overlay::ConfirmDiscard(Then::Quit),
+        "Ctrl-C asks too"
+    );
+    press(&mut app, KeyCode::Char('q'));
     assert!(app.quit);
+}
+
+#[test]
+fn o_with_unsaved_edits_asks_before_the_picker() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Right);
+    press(&mut app, KeyCode::Char('o'));
+    assert_eq!(app.overlay, Overlay::ConfirmDiscard(Then::Open));
+    press(&mut app, KeyCode::Char('n'));
+    assert_eq!(app.overlay, Overlay::None);
+    press(&mut app, KeyCode::Char('o'));
+    press(&mut app, KeyCode::Char('o'));
+    assert!(matches!(app.overlay, Overlay::Picker(_)));
+    // Undoing every edit leaves nothing unsaved: o opens at once.
+    press(&mut app, KeyCode::Esc);
+    press(&mut app, KeyCode::Char('u'));
+    press(&mut app, KeyCode::Char('o'));
+    assert!(matches!(app.overlay, Overlay::Picker(_)));
+}
+
+#[test]
+fn saved_edits_are_not_unsaved() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    press(&mut app, KeyCode::Right);
+    press(&mut app, KeyCode::Char('S'));
+    press(&mut app, KeyCode::Enter);
+    press(&mut app, KeyCode::Char('q'));
+    assert!(app.quit);
+}
+
+#[test]
+fn the_value_prompt_selects_its_value_so_typing_replaces_it() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Enter);
+    assert_eq!(prompt_text(&app), "5000");
+    type_text(&mut app, "50");
+    assert_eq!(
+        prompt_text(&app),
+        "50",
+        "typing replaced the selected value"
+    );
+    press(&mut app, KeyCode::Esc);
+    // A cursor key keeps the value for editing.
+    press(&mut app, KeyCode::Enter);
+    press(&mut app, KeyCode::End);
+    type_text(&mut app, "1");
+    assert_eq!(prompt_text(&app), "50001");
+    // Ctrl-U clears to the start, Ctrl-A / Ctrl-E go to the ends, Ctrl-W drops a word.
+    ctrl(&mut app, 'u');
+    assert_eq!(prompt_text(&app), "");
+    type_text(&mut app, "12 34");
+    ctrl(&mut app, 'w');
+    assert_eq!(prompt_text(&app), "12 ");
+    ctrl(&mut app, 'a');
+    type_text(&mut app, "9");
+    assert_eq!(prompt_text(&app), "912 ");
+    ctrl(&mut app, 'e');
+    press(&mut app, KeyCode::Backspace);
+    assert_eq!(prompt_text(&app), "912");
+}
+
+#[test]
+fn a_tiny_value_is_pre_filled_short_and_exact() {
+    let mut app = app_with("pinned4", true);
+    select(&mut app, "damping");
+    press(&mut app, KeyCode::Enter);
+    type_text(&mut app, "1e-300");
+    press(&mut app, KeyCode::Enter);
+    press(&mut app, KeyCode::Enter);
+    let text = prompt_text(&app);
+    assert_eq!(text, "1e-300");
+    assert_eq!(
+        text.parse::<f64>().unwrap(),
+        app.sim.settings.params.damping
+    );
+}
+
+#[test]
+fn a_fraction_in_a_whole_number_field_is_refused_as_not_whole() {
+    let mut app = app_with("pinned4", true);
+    select(&mut app, "steps/frame");
+    press(&mut app, KeyCode::Enter);
+    type_text(&mut app, "30.5");
+    press(&mut app, KeyCode::Enter);
+    match &app.overlay {
+        Overlay::Prompt(p) => {
+            let e = p.error.as_deref().unwrap();
+            assert!(e.contains("not a whole number"), "{e}");
+            assert!(!e.contains("out of range"), "{e}");
+        }
+        other => panic!("expected the prompt, got {other:?}"),
+    }
+}
+
+#[test]
+fn undo_takes_back_the_last_edit_not_the_scene_value() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Enter);
+    type_text(&mut app, "6000");
+    press(&mut app, KeyCode::Enter);
+    press(&mut app, KeyCode::Enter);
+    type_text(&mut app, "7000");
+    press(&mut app, KeyCode::Enter);
+    press(&mut app, KeyCode::Char('u'));
+    assert_eq!(app.sim.settings.params.ks, 6000.0);
+    press(&mut app, KeyCode::Char('U'));
+    assert_eq!(app.sim.settings.params.ks, 5000.0);
+    press(&mut app, KeyCode::Char('u'));
+    assert_eq!(
+        app.sim.settings.params.ks, 6000.0,
+        "U is undone like any edit"
+    );
+}
+
+/// Runs the app inline for `seconds` of simulated time; true when it was never stopped.
+fn run_for(app: &mut App, seconds: f64) -> bool {
+    let frames = (seconds * app.sim.settings.params.frames_per_sec).round() as u64;
+    for _ in 0..frames {
+        update(app, Message::Tick(Duration::from_secs_f64(1.0 / 90.0)));
+        update::run_owed(app, &mut || true);
+        if app.sim.fault.is_some() {
+            return false;
+        }
+    }
+    true
+}
+
+#[test]
+fn the_stretch_limit_off_experiment_runs_on_and_stretches() {
+    let mut app = app_with("pinned4", false);
+    select(&mut app, "stretch limit");
+    press(&mut app, KeyCode::Right);
+    assert!(!app.sim.settings.params.stretch_limit);
+    // The course's experiment: without the limit the springs stretch far past 1.1 and the
+    // cloth settles there; that is physics, not a divergence.
+    assert!(run_for(&mut app, 3.0), "{:?}", app.sim.fault);
+    let peak = app
+        .sim
+        .history
+        .iter()
+        .map(|s| s.stretch)
+        .fold(0.0, f64::max);
+    assert!(peak > 2.0, "the cloth stretched (peak {peak})");
+}
+
+#[test]
+fn free_fall_with_every_spring_off_runs_on() {
+    let mut app = app_with("pinned4", false);
+    for label in ["structural", "shearing", "bending"] {
+        select(&mut app, label);
+        press(&mut app, KeyCode::Right);
+    }
+    // Every free point falls at g: after 3 s at 29 m/s and still speeding up, never outrunning
+    // gravity.
+    assert!(run_for(&mut app, 3.0), "{:?}", app.sim.fault);
+    assert!(app.sim.history.back().unwrap().kinetic > 0.0);
+}
+
+#[test]
+fn the_stopped_box_swallows_digits_and_enter_types_a_value() {
+    let mut app = stopped_app();
+    press(&mut app, KeyCode::Char('0'));
+    assert_eq!(
+        app.overlay,
+        Overlay::Fault,
+        "a digit neither closes the box nor acts"
+    );
+    press(&mut app, KeyCode::Enter);
+    assert!(
+        matches!(app.overlay, Overlay::Prompt(_)),
+        "Enter types a value"
+    );
+    type_text(&mut app, "5000");
+    press(&mut app, KeyCode::Enter);
+    assert_eq!(app.sim.settings.params.ks, 5000.0);
+}
+
+#[test]
+fn space_goes_on_anyway_after_a_runaway() {
+    let mut app = stopped_app();
+    let fault = app.sim.fault.clone().unwrap();
+    assert!(fault.resumable, "{fault:?}");
+    assert!(fault.advice.contains("steps/frame"), "{}", fault.advice);
+    press(&mut app, KeyCode::Char(' '));
+    assert!(app.running);
+    assert!(app.sim.fault.is_none());
+    assert_eq!(app.overlay, Overlay::None);
+}
+
+/// pinned4 stopped by the guard: ks far past Verlet's limit.
+fn stopped_app() -> App {
+    let mut app = app_with("pinned4", false);
+    press(&mut app, KeyCode::Enter);
+    // 1e6 N/m is about 4.6 times Verlet's limit m/(2 dt^2) = 218,700 N/m for 0.06 kg at
+    // 1/2700 s: the error grows every step, a runaway rather than an instant NaN.
+    type_text(&mut app, "1000000");
+    press(&mut app, KeyCode::Enter);
+    assert!(!run_for(&mut app, 2.0), "the guard stops it");
+    assert_eq!(app.overlay, Overlay::Fault);
+    app
 }
 
 #[test]
@@ -231,8 +496,8 @@ fn a_diverging_run_pauses_shows_the_last_good_frame_and_resets() {
     assert!(app.sim.state.first_non_finite().is_none());
     // Keys other than the recovery keys do not resume a failed run.
     press(&mut app, KeyCode::Esc);
-    press(&mut app, KeyCode::Char(' '));
-    assert!(!app.running);
+    press(&mut app, KeyCode::Char('n'));
+    assert!(app.sim.fault.is_some());
     press(&mut app, KeyCode::Char('U'));
     press(&mut app, KeyCode::Char('r'));
     assert!(app.sim.fault.is_none());
@@ -270,7 +535,13 @@ fn editing_a_solver_option_row_rebuilds_the_solver_with_it() {
         paused: true,
         ..Args::default()
     };
-    let mut app = build(&args, &crate::default_registry(), false).unwrap();
+    let mut app = build_in(
+        &args,
+        &crate::default_registry(),
+        false,
+        &cloth_render::ColorEnv::default(),
+    )
+    .unwrap();
     let at = PARAMS.len();
     assert_eq!(super::params::row(&app.sim, at).label, "iterations");
     while app.selected != at {
@@ -278,10 +549,12 @@ fn editing_a_solver_option_row_rebuilds_the_solver_with_it() {
     }
     assert_eq!(app.sim.settings.options, vec![10.0]);
     press(&mut app, KeyCode::Right);
-    assert_eq!(app.sim.settings.options, vec![11.0]);
-    assert_eq!(app.sim.options(), &serde_json::json!({"iterations": 11}));
+    // 1 to 1000 spans three decades, so the row steps by ratios of 2^(1/4): 10 * 1.189 = 11.9,
+    // a whole number of iterations: 12.
+    assert_eq!(app.sim.settings.options, vec![12.0]);
+    assert_eq!(app.sim.options(), &serde_json::json!({"iterations": 12}));
     assert!(app.sim.step_frame().is_ok());
-    // Restoring the row goes back to the scene's value (the solver's default here).
+    // Undo takes the edit back to the scene's value (the solver's default here).
     press(&mut app, KeyCode::Char('u'));
     assert_eq!(app.sim.options(), &serde_json::json!({"iterations": 10}));
 }
@@ -316,13 +589,14 @@ fn save_writes_the_edited_scene_and_asks_before_overwriting() {
 fn the_picker_opens_another_bundled_scene() {
     let mut app = app_with("pinned4", true);
     press(&mut app, KeyCode::Char('o'));
-    let sphere = cloth_scene::BUNDLED
-        .iter()
-        .position(|s| s.name == "sphere")
-        .unwrap();
-    for _ in 0..sphere {
-        press(&mut app, KeyCode::Down);
+    let at = |name: &str| cloth_scene::BUNDLED.iter().position(|s| s.name == name);
+    match &app.overlay {
+        Overlay::Picker(p) => {
+            assert_eq!(Some(p.selected), at("pinned4"), "starts on the open scene");
+        }
+        other => panic!("expected the picker, got {other:?}"),
     }
+    pick(&mut app, at("sphere").unwrap());
     press(&mut app, KeyCode::Enter);
     assert_eq!(app.sim.scene.origin, "sphere");
     assert_eq!(app.overlay, Overlay::None);
@@ -436,9 +710,7 @@ fn the_picker_lists_and_opens_scene_files_of_the_working_folder() {
         Overlay::Picker(p) => assert_eq!(p.files, vec!["mine.json".to_owned()]),
         other => panic!("expected the picker, got {other:?}"),
     }
-    for _ in 0..cloth_scene::BUNDLED.len() {
-        press(&mut app, KeyCode::Down);
-    }
+    pick(&mut app, cloth_scene::BUNDLED.len());
     press(&mut app, KeyCode::Enter);
     assert!(
         app.sim.scene.origin.ends_with("mine.json"),
@@ -479,4 +751,94 @@ fn without_colour_nothing_on_screen_is_coloured() {
     // The same screen with colour allowed does use it (so the check above can fail).
     app.color_allowed = true;
     assert!(draw(&mut app));
+}
+
+#[test]
+fn snapshot_the_value_prompt_with_its_value_selected() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Enter);
+    insta::assert_snapshot!("value_prompt_selected_100x30", screen(&mut app, 100, 30));
+}
+
+#[test]
+fn snapshot_the_unsaved_edits_question() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Right);
+    press(&mut app, KeyCode::Char('q'));
+    insta::assert_snapshot!("unsaved_edits_100x30", screen(&mut app, 100, 30));
+}
+
+#[test]
+fn opening_a_cloth_of_more_than_250000_points_asks_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut file: serde_json::Value =
+        serde_json::from_str(cloth_scene::bundled("pinned4").unwrap().json).unwrap();
+    file["cloth"]["num_width_points"] = 600.into();
+    file["cloth"]["num_height_points"] = 600.into();
+    std::fs::write(dir.path().join("big.json"), file.to_string()).unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    press(&mut app, KeyCode::Char('o'));
+    pick(&mut app, cloth_scene::BUNDLED.len());
+    press(&mut app, KeyCode::Enter);
+    assert_eq!(app.overlay, Overlay::ConfirmBig(360_000));
+    // The snapshot names the file without its temporary folder, so it is the same every run.
+    let waiting = app.big.as_mut().unwrap();
+    let origin = std::mem::replace(&mut waiting.origin, "big.json".to_owned());
+    insta::assert_snapshot!("big_cloth_100x30", screen(&mut app, 100, 30));
+    app.big.as_mut().unwrap().origin = origin;
+    press(&mut app, KeyCode::Char('n'));
+    assert_eq!(app.sim.scene.origin, "pinned4", "n keeps the open scene");
+    press(&mut app, KeyCode::Char('o'));
+    pick(&mut app, cloth_scene::BUNDLED.len());
+    press(&mut app, KeyCode::Enter);
+    press(&mut app, KeyCode::Char('y'));
+    assert_eq!(app.sim.scene.mesh.len(), 360_000);
+    // Drawn through a coarser grid of at most 128 points a side.
+    let d = app.display.as_ref().expect("a display grid");
+    assert_eq!((d.mesh.nw(), d.mesh.nh()), (128, 128));
+}
+
+#[test]
+fn a_16_colour_terminal_gets_16_colours_and_dumb_terminals_none() {
+    let env = |term: &str| cloth_render::ColorEnv {
+        term: Some(term.to_owned()),
+        ..cloth_render::ColorEnv::default()
+    };
+    let args = Args {
+        paused: true,
+        ..Args::default()
+    };
+    let app = build_in(&args, &crate::default_registry(), true, &env("xterm")).unwrap();
+    assert!(app.color_allowed);
+    assert_eq!(app.depth, cloth_render::ColorDepth::Ansi16);
+    let app = build_in(
+        &args,
+        &crate::default_registry(),
+        true,
+        &env("xterm-256color"),
+    )
+    .unwrap();
+    assert_eq!(app.depth, cloth_render::ColorDepth::Ansi256);
+    let always = Args {
+        color: cloth_render::ColorChoice::Always,
+        ..args.clone()
+    };
+    let app = build_in(&always, &crate::default_registry(), true, &env("xterm")).unwrap();
+    assert!(app.color, "--color always colours the cloth too");
+}
+
+#[test]
+fn snapshot_half_blocks_without_colour_keep_the_shading() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Char('m'));
+    assert_eq!(app.mode, cloth_render::Mode::Half);
+    let s = screen(&mut app, 100, 30);
+    // More than one shade block: shading, not a silhouette.
+    let kinds = ['░', '▒', '▓', '█']
+        .iter()
+        .filter(|c| s.contains(**c))
+        .count();
+    assert!(kinds >= 2, "{s}");
+    insta::assert_snapshot!("half_blocks_100x30", s);
 }

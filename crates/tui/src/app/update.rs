@@ -7,19 +7,41 @@ use ratatui::layout::{Position, Rect};
 
 use super::layout;
 use super::message::Message;
-use super::model::{App, Layout, Level, Overlay, Picker, Prompt, Purpose, RATES};
+use super::model::{App, Layout, Level, Overlay, Picker, Prompt, Purpose, RATES, Then};
 use super::params::{Kind, is_option_row, row, row_count};
-use super::sim::Simulation;
+use super::sim::{Command, Simulation};
 use crate::output;
 
 /// Radians of orbit per cell of mouse drag.
 const DRAG_TURN: f64 = 0.05;
 
+/// Points above which opening a scene asks first (a 500 x 500 cloth).
+pub const BIG_CLOTH: usize = 250_000;
+
 /// Applies one message.
 pub fn update(app: &mut App, msg: Message) {
     match msg {
-        Message::Quit => app.quit = true,
+        Message::Quit => {
+            if app.unsaved() && app.overlay != Overlay::ConfirmDiscard(Then::Quit) {
+                app.overlay = Overlay::ConfirmDiscard(Then::Quit);
+            } else {
+                app.quit = true;
+            }
+        }
         Message::Escape => escape(app),
+        Message::Suspend => app.suspend = true,
+        Message::ToggleMouse => {
+            app.mouse = !app.mouse;
+            app.drag = None;
+            app.say(
+                Level::Info,
+                if app.mouse {
+                    "mouse captured: drag turns the orbit view, the wheel zooms (M frees it)"
+                } else {
+                    "mouse free: the terminal selects text again (M captures it)"
+                },
+            );
+        }
         Message::ToggleHelp => {
             app.overlay = if app.overlay == Overlay::Help {
                 Overlay::None
@@ -37,6 +59,7 @@ pub fn update(app: &mut App, msg: Message) {
             } else {
                 app.rate.saturating_sub(1)
             };
+            send_run(app);
             let r = app.rate();
             let text = if r >= 1.0 {
                 format!("simulated time runs at {r}x real time")
@@ -54,8 +77,8 @@ pub fn update(app: &mut App, msg: Message) {
         Message::SelectNext => app.selected = (app.selected + 1) % row_count(&app.sim),
         Message::Nudge { dir, coarse } => nudge(app, dir, coarse),
         Message::EditValue => edit_value(app),
-        Message::RestoreParam => restore(app, false),
-        Message::RestoreAll => restore(app, true),
+        Message::Undo => undo(app),
+        Message::RestoreAll => restore_all(app),
         Message::CycleLayout => {
             app.layout = app.layout.next();
             app.maximised = false;
@@ -93,12 +116,7 @@ pub fn update(app: &mut App, msg: Message) {
         Message::CycleMode => {
             let i = Mode::ALL.iter().position(|&m| m == app.mode).unwrap_or(0);
             app.mode = Mode::ALL[(i + 1) % Mode::ALL.len()];
-            let extra = if app.mode == Mode::Half && !app.color {
-                " (without colour, half blocks show coverage only; C turns colour on)"
-            } else {
-                ""
-            };
-            app.say(Level::Info, format!("glyph mode: {}{extra}", app.mode));
+            app.say(Level::Info, format!("glyph mode: {}", app.mode));
         }
         Message::ToggleColor => {
             app.color = !app.color;
@@ -114,14 +132,15 @@ pub fn update(app: &mut App, msg: Message) {
         Message::Orbit { yaw, pitch } => turn(app, yaw, pitch),
         Message::Zoom(f) => zoom(app, f),
         Message::ResetCamera => {
-            app.orbit = Orbit::course_default(&app.sim.scene.mesh);
+            app.orbit = Orbit::framing(&app.sim.scene.mesh, &app.sim.scene.colliders);
             app.say(Level::Info, "orbit camera reset");
         }
         Message::OpenPicker => {
-            app.overlay = Overlay::Picker(Picker {
-                selected: 0,
-                files: json_files(&app.cwd),
-            });
+            if app.unsaved() && app.overlay != Overlay::ConfirmDiscard(Then::Open) {
+                app.overlay = Overlay::ConfirmDiscard(Then::Open);
+            } else {
+                open_picker(app);
+            }
         }
         Message::Save => {
             let stem = std::path::Path::new(&app.sim.scene.origin)
@@ -129,47 +148,107 @@ pub fn update(app: &mut App, msg: Message) {
                 .and_then(|s| s.to_str())
                 .unwrap_or("scene")
                 .to_owned();
-            app.overlay = Overlay::Prompt(Prompt::new(
+            app.overlay = Overlay::Prompt(Prompt::prefilled(
                 Purpose::SavePath,
                 format!("{stem}-edited.json"),
             ));
         }
         Message::Input(c) => prompt_edit(app, |p| {
+            if p.selected {
+                p.text.clear();
+                p.cursor = 0;
+            }
             let at = byte_index(&p.text, p.cursor);
             p.text.insert(at, c);
             p.cursor += 1;
         }),
         Message::Backspace => prompt_edit(app, |p| {
-            if p.cursor > 0 {
+            if p.selected {
+                p.text.clear();
+                p.cursor = 0;
+            } else if p.cursor > 0 {
                 p.cursor -= 1;
                 let at = byte_index(&p.text, p.cursor);
                 p.text.remove(at);
             }
         }),
         Message::Delete => prompt_edit(app, |p| {
-            if p.cursor < p.text.chars().count() {
+            if p.selected {
+                p.text.clear();
+                p.cursor = 0;
+            } else if p.cursor < p.text.chars().count() {
                 let at = byte_index(&p.text, p.cursor);
                 p.text.remove(at);
             }
+        }),
+        Message::KillToStart => prompt_edit(app, |p| {
+            let at = if p.selected {
+                p.text.len()
+            } else {
+                byte_index(&p.text, p.cursor)
+            };
+            p.text.replace_range(..at, "");
+            p.cursor = 0;
+        }),
+        Message::KillToEnd => prompt_edit(app, |p| {
+            let at = if p.selected {
+                0
+            } else {
+                byte_index(&p.text, p.cursor)
+            };
+            p.text.truncate(at);
+            p.cursor = p.text.chars().count();
+        }),
+        Message::KillWord => prompt_edit(app, |p| {
+            if p.selected {
+                p.text.clear();
+                p.cursor = 0;
+                return;
+            }
+            // Like readline's Ctrl-W: the blanks before the cursor, then the word before them.
+            let chars: Vec<char> = p.text.chars().collect();
+            let mut start = p.cursor.min(chars.len());
+            while start > 0 && chars[start - 1].is_whitespace() {
+                start -= 1;
+            }
+            while start > 0 && !chars[start - 1].is_whitespace() {
+                start -= 1;
+            }
+            let (a, b) = (byte_index(&p.text, start), byte_index(&p.text, p.cursor));
+            p.text.replace_range(a..b, "");
+            p.cursor = start;
         }),
         Message::Move(d) => match &mut app.overlay {
             Overlay::Help => {
                 app.help_scroll = (i64::from(app.help_scroll) + i64::from(d)).clamp(0, 200) as u16;
             }
             Overlay::Picker(p) => {
-                let n = p.len() as i64;
-                p.selected = (p.selected as i64 + i64::from(d)).rem_euclid(n) as usize;
+                // NOTE: the list stops at its ends rather than wrapping, so a held key does
+                // not land on "type a path" from the top.
+                let last = p.len().saturating_sub(1) as i64;
+                p.selected = (p.selected as i64 + i64::from(d)).clamp(0, last) as usize;
             }
             Overlay::Prompt(p) => {
                 let len = p.text.chars().count();
-                p.cursor = (p.cursor as i64 + i64::from(d)).clamp(0, len as i64) as usize;
+                if p.selected {
+                    // A cursor key keeps the pre-filled text for editing, at that end.
+                    p.selected = false;
+                    p.cursor = if d < 0 { 0 } else { len };
+                } else {
+                    p.cursor = (p.cursor as i64 + i64::from(d)).clamp(0, len as i64) as usize;
+                }
             }
             _ => {}
         },
-        Message::Home => prompt_edit(app, |p| p.cursor = 0),
+        Message::Home => prompt_edit(app, |p| {
+            p.selected = false;
+            p.cursor = 0;
+        }),
         Message::End => prompt_edit(app, |p| p.cursor = p.text.chars().count()),
         Message::Submit => submit(app),
         Message::Answer(yes) => answer(app, yes),
+        Message::MouseDown { .. } | Message::MouseDrag { .. } | Message::Wheel { .. }
+            if !app.mouse => {}
         Message::MouseDown { col, row } => {
             app.drag = orbit_pane_at(app, col, row).map(|_| (col, row));
         }
@@ -195,8 +274,9 @@ pub fn update(app: &mut App, msg: Message) {
             }
         }
         Message::Resize { width, height } => app.screen = (width, height),
+        #[cfg(test)]
         Message::Tick(wall) => {
-            if app.running && app.sim.fault.is_none() {
+            if app.worker.is_none() && app.running && app.sim.fault.is_none() {
                 app.debt += wall.as_secs_f64() * app.rate();
             }
         }
@@ -204,8 +284,9 @@ pub fn update(app: &mut App, msg: Message) {
     }
 }
 
-/// Takes owed steps while `more()` allows; returns how many steps ran. The loop passes a
-/// wall-clock budget as `more`; tests pass a counter.
+/// Takes owed steps inline while `more()` allows; returns how many steps ran. The live app
+/// steps on a worker thread; tests step inline with this, deterministically.
+#[cfg(test)]
 pub fn run_owed(app: &mut App, more: &mut dyn FnMut() -> bool) -> u64 {
     let mut n = 0;
     while app.running && app.debt >= app.sim.dt() && more() {
@@ -228,25 +309,38 @@ fn stopped(app: &mut App) {
 
 fn escape(app: &mut App) {
     match app.overlay {
-        Overlay::None => app.quit = true,
+        Overlay::None => app.say(Level::Info, "Esc closes boxes; q quits"),
         Overlay::Fault => {
             app.overlay = Overlay::None;
             app.say(
                 Level::Warn,
-                "stopped: press r to reset (parameters are kept), u to restore a parameter",
+                "stopped: r resets (parameters are kept), space goes on anyway, u undoes an edit",
             );
+        }
+        Overlay::ConfirmBig(_) => {
+            app.big = None;
+            app.overlay = Overlay::None;
         }
         _ => app.overlay = Overlay::None,
     }
 }
 
+/// Tells the worker whether to run and how fast.
+fn send_run(app: &mut App) {
+    let rate = app.rate();
+    let running = app.running;
+    let _ = app.send(Command::Run { running, rate });
+}
+
 fn toggle_pause(app: &mut App) {
     if app.sim.fault.is_some() {
-        app.overlay = Overlay::Fault;
+        resume_anyway(app);
         return;
     }
     app.running = !app.running;
     app.debt = 0.0;
+    app.stats.rates = super::worker::Rates::default();
+    send_run(app);
     app.say(
         Level::Info,
         if app.running {
@@ -257,23 +351,86 @@ fn toggle_pause(app: &mut App) {
     );
 }
 
-fn step_frame(app: &mut App) {
-    app.running = false;
-    app.debt = 0.0;
-    if app.sim.step_frame().is_err() {
-        stopped(app);
-    } else {
-        app.say(
-            Level::Info,
-            format!(
-                "one frame: t = {:.4} s (frame {})",
-                app.sim.time, app.sim.frames
-            ),
-        );
+/// Goes on after a stop, from the last good frame, with the runaway test off until a reset.
+fn resume_anyway(app: &mut App) {
+    match app.sim.resume_anyway() {
+        Ok(()) => {
+            let _ = app.send(Command::ResumeAnyway);
+            app.overlay = Overlay::None;
+            app.running = true;
+            app.debt = 0.0;
+            send_run(app);
+            app.say(
+                Level::Warn,
+                "going on anyway: the runaway test is off until r resets the cloth",
+            );
+        }
+        Err(e) => {
+            app.overlay = Overlay::Fault;
+            app.say(Level::Error, e);
+        }
     }
 }
 
+fn step_frame(app: &mut App) {
+    app.running = false;
+    app.debt = 0.0;
+    if app.worker.is_some() {
+        let _ = app.send(Command::StepFrame);
+        app.step_note = true;
+        return;
+    }
+    if app.sim.step_frame().is_err() {
+        stopped(app);
+    } else {
+        say_frame(app);
+    }
+}
+
+/// "one frame: t = ..." after a single frame.
+pub fn say_frame(app: &mut App) {
+    app.say(
+        Level::Info,
+        format!(
+            "one frame: t = {:.4} s (frame {})",
+            app.sim.time, app.sim.frames
+        ),
+    );
+}
+
+/// Takes in what the worker published: the cloth, its clock and any stop.
+pub fn adopt(app: &mut App) -> bool {
+    let Some(w) = &app.worker else {
+        return false;
+    };
+    let Some(got) = w.adopt_into(&mut app.sim) else {
+        return false;
+    };
+    app.stats.rates = got.rates;
+    for e in got.errors {
+        app.say(Level::Error, e);
+    }
+    if app.sim.fault.is_some() && app.running {
+        stopped(app);
+    } else if !got.running && app.running && app.sim.fault.is_none() {
+        // The worker paused by itself only to step a frame; follow it.
+        app.running = false;
+    }
+    if app.step_note {
+        app.step_note = false;
+        if app.sim.fault.is_some() {
+            stopped(app);
+        } else {
+            say_frame(app);
+        }
+    }
+    true
+}
+
 fn reset(app: &mut App) {
+    if app.worker.is_some() {
+        let _ = app.send(Command::Reset);
+    }
     app.sim.reset();
     app.debt = 0.0;
     app.extent = None;
@@ -297,8 +454,66 @@ fn nudge(app: &mut App, dir: i32, coarse: bool) {
         return;
     };
     let nv = p.nudged(v, dir, coarse);
+    remember(app);
     (p.set)(&mut app.sim.settings, nv);
     changed(app, app.selected);
+}
+
+/// Keeps the settings before an edit, for undo.
+fn remember(app: &mut App) {
+    /// Edits kept for undo.
+    const DEPTH: usize = 100;
+    let now = (app.sim.settings.clone(), app.sim.entry().name());
+    if app.undo.last() != Some(&now) {
+        if app.undo.len() == DEPTH {
+            app.undo.remove(0);
+        }
+        app.undo.push(now);
+    }
+}
+
+fn undo(app: &mut App) {
+    let Some((settings, name)) = app.undo.pop() else {
+        app.say(Level::Info, "nothing to undo");
+        return;
+    };
+    // The solver first: its options are rows only while it is the active one.
+    let solver_changed = name != app.sim.entry().name();
+    if solver_changed && let Err(e) = app.sim.set_solver(name) {
+        app.say(Level::Warn, format!("{e:#}"));
+        return;
+    }
+    // Say which row the undo changed, and select it.
+    let row_at = (0..row_count(&app.sim)).find(|&i| {
+        let p = row(&app.sim, i);
+        match p.kind {
+            Kind::Solver => solver_changed,
+            _ => !solver_changed && (p.get)(&settings) != (p.get)(&app.sim.settings),
+        }
+    });
+    let options_changed = settings.options != app.sim.settings.options;
+    app.sim.settings = settings;
+    if options_changed && let Err(e) = app.sim.apply_options() {
+        app.say(Level::Warn, format!("{e:#}"));
+        return;
+    }
+    let Some(r) = row_at else {
+        app.selected = app.selected.min(row_count(&app.sim) - 1);
+        app.say(Level::Info, "undone");
+        return;
+    };
+    app.selected = r;
+    if row(&app.sim, r).kind == Kind::Solver {
+        app.say(Level::Info, format!("undone: solver {name}"));
+        if let Some(w) = app.sim.stability_warning() {
+            app.say(Level::Warn, w);
+        }
+    } else {
+        changed(app, r);
+        if let Some(n) = &mut app.note {
+            n.text = format!("undone: {}", n.text);
+        }
+    }
 }
 
 fn absent(label: &str) -> String {
@@ -334,10 +549,12 @@ fn cycle_solver(app: &mut App, dir: i32) {
     let current = app.sim.entry().name();
     let at = all.iter().position(|&k| k == current).unwrap_or(0) as i64;
     let mut refused = Vec::new();
+    let before = (app.sim.settings.clone(), current);
     for i in 1..n {
         let name = all[(at + i * i64::from(dir.signum())).rem_euclid(n) as usize];
         match app.sim.set_solver(name) {
             Ok(()) => {
+                app.undo.push(before);
                 app.selected = app.selected.min(row_count(&app.sim) - 1);
                 let entry = app.sim.entry();
                 let steps = entry.steps_per_frame();
@@ -377,54 +594,48 @@ fn edit_value(app: &mut App) {
             Some(v) => {
                 // Full precision, so accepting the prompt unchanged changes nothing.
                 app.overlay =
-                    Overlay::Prompt(Prompt::new(Purpose::Value(app.selected), format!("{v}")));
+                    Overlay::Prompt(Prompt::prefilled(Purpose::Value(app.selected), exact(v)));
             }
             None => app.say(Level::Warn, absent(p.label)),
         },
     }
 }
 
-fn restore(app: &mut App, all: bool) {
+/// `v` written exactly (it reads back to the same bits) and short: plain decimals in the
+/// usual range, scientific notation for tiny or huge values (`1e-300`, not 300 digits).
+pub fn exact(v: f64) -> String {
+    if v == 0.0 || (1.0e-4..1.0e15).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+fn restore_all(app: &mut App) {
     let scene = app.sim.scene_settings();
-    if all {
-        app.sim.settings = scene;
-        let wanted = app.sim.scene_solver().to_owned();
-        let result = if app.sim.entry().name() == wanted {
-            app.sim.apply_options()
-        } else {
-            app.sim.set_solver(&wanted)
-        };
-        app.selected = app.selected.min(row_count(&app.sim) - 1);
-        if let Err(e) = result {
-            app.say(Level::Warn, format!("{e:#}"));
-            return;
-        }
-        app.say(
-            Level::Info,
-            "every parameter restored to the scene's values",
-        );
+    let wanted = app.sim.scene_solver().to_owned();
+    if app.sim.settings == scene && app.sim.entry().name() == wanted {
+        app.say(Level::Info, "every parameter already has the scene's value");
         return;
     }
-    let p = row(&app.sim, app.selected);
-    match p.kind {
-        Kind::Solver => {
-            let wanted = app.sim.scene_solver().to_owned();
-            match app.sim.set_solver(&wanted) {
-                Ok(()) => {
-                    app.selected = app.selected.min(row_count(&app.sim) - 1);
-                    app.say(Level::Info, format!("solver restored: {wanted}"));
-                }
-                Err(e) => app.say(Level::Warn, format!("{e:#}")),
-            }
-        }
-        _ => match (p.get)(&scene) {
-            Some(v) => {
-                (p.set)(&mut app.sim.settings, v);
-                changed(app, app.selected);
-            }
-            None => app.say(Level::Warn, absent(p.label)),
-        },
+    remember(app);
+    // The scene's solver first (its options as the scene gives them), then the scene's values.
+    if app.sim.entry().name() != wanted
+        && let Err(e) = app.sim.set_solver(&wanted)
+    {
+        app.say(Level::Warn, format!("{e:#}"));
+        return;
     }
+    app.sim.settings = app.sim.scene_settings();
+    app.selected = app.selected.min(row_count(&app.sim) - 1);
+    if let Err(e) = app.sim.apply_options() {
+        app.say(Level::Warn, format!("{e:#}"));
+        return;
+    }
+    app.say(
+        Level::Info,
+        "every parameter restored to the scene's values (u undoes it)",
+    );
 }
 
 fn turn(app: &mut App, yaw: f64, pitch: f64) {
@@ -474,6 +685,8 @@ fn prompt_edit(app: &mut App, f: impl FnOnce(&mut Prompt)) {
     if let Overlay::Prompt(p) = &mut app.overlay {
         f(p);
         p.error = None;
+        // Any edit ends the selection of the pre-filled text (it was replaced or kept).
+        p.selected = false;
     }
 }
 
@@ -514,6 +727,14 @@ fn submit(app: &mut App) {
                 app.overlay = Overlay::Prompt(Prompt::new(Purpose::OpenPath, String::new()));
             }
         }
+        Overlay::ConfirmDiscard(then) => {
+            app.overlay = Overlay::ConfirmDiscard(then);
+            answer(app, true);
+        }
+        Overlay::ConfirmBig(n) => {
+            app.overlay = Overlay::ConfirmBig(n);
+            answer(app, true);
+        }
         Overlay::Prompt(mut p) => {
             let result = match p.purpose {
                 Purpose::Value(row) => submit_value(app, row, &p.text),
@@ -532,6 +753,9 @@ fn submit(app: &mut App) {
 fn submit_value(app: &mut App, at: usize, text: &str) -> Result<(), String> {
     let p = row(&app.sim, at);
     let v = p.parse(text)?;
+    if (p.get)(&app.sim.settings) != Some(v) {
+        remember(app);
+    }
     (p.set)(&mut app.sim.settings, v);
     changed(app, at);
     Ok(())
@@ -554,8 +778,28 @@ fn submit_save(app: &mut App, text: &str) -> Result<(), String> {
 }
 
 fn answer(app: &mut App, yes: bool) {
-    let Overlay::ConfirmOverwrite(name) = std::mem::take(&mut app.overlay) else {
-        return;
+    let name = match std::mem::take(&mut app.overlay) {
+        Overlay::ConfirmOverwrite(name) => name,
+        Overlay::ConfirmDiscard(then) => {
+            match (yes, then) {
+                (true, Then::Quit) => app.quit = true,
+                (true, Then::Open) => open_picker(app),
+                (false, _) => {}
+            }
+            return;
+        }
+        Overlay::ConfirmBig(_) => {
+            if let Some(scene) = app.big.take()
+                && yes
+            {
+                start_scene(app, *scene);
+            }
+            return;
+        }
+        other => {
+            app.overlay = other;
+            return;
+        }
     };
     if !yes {
         // Back to the file name, so another can be typed.
@@ -584,6 +828,7 @@ fn save(app: &mut App, path: &std::path::Path) -> anyhow::Result<()> {
     let mut text = serde_json::to_string_pretty(&file)?;
     text.push('\n');
     let written = output::write_atomic(path, text.as_bytes())?;
+    app.saved = (app.sim.settings.clone(), app.sim.entry().name());
     let saved = format!(
         "saved to {} (load it with: clothsim tui {})",
         path.display(),
@@ -596,13 +841,62 @@ fn save(app: &mut App, path: &std::path::Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Opens the scene picker on the scene that is open now.
+fn open_picker(app: &mut App) {
+    let files = json_files(&app.cwd);
+    let origin = &app.sim.scene.origin;
+    let selected = cloth_scene::BUNDLED
+        .iter()
+        .position(|b| b.name == origin)
+        .or_else(|| {
+            let name = std::path::Path::new(origin).file_name()?.to_str()?;
+            let in_cwd = app.cwd.join(name) == std::path::Path::new(origin)
+                || std::path::Path::new(origin).parent() == Some(std::path::Path::new(""));
+            files
+                .iter()
+                .position(|f| in_cwd && f == name)
+                .map(|i| cloth_scene::BUNDLED.len() + i)
+        })
+        .unwrap_or(0);
+    app.overlay = Overlay::Picker(Picker { selected, files });
+}
+
+/// A typed path with a leading `~` meaning the home folder, as a shell would read it.
+fn expand_home(text: &str) -> PathBuf {
+    let home = || std::env::var_os("HOME").filter(|h| !h.is_empty());
+    if text == "~" {
+        if let Some(h) = home() {
+            return PathBuf::from(h);
+        }
+    } else if let Some(rest) = text.strip_prefix("~/")
+        && let Some(h) = home()
+    {
+        return PathBuf::from(h).join(rest);
+    }
+    PathBuf::from(text)
+}
+
+/// An error with its causes (the OS's reason included), as one line.
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        let more = s.to_string();
+        if !text.contains(&more) {
+            text = format!("{text}: {more}");
+        }
+        source = s.source();
+    }
+    text
+}
+
 fn submit_open(app: &mut App, text: &str) -> Result<(), String> {
     let name = text.trim();
     if name.is_empty() {
         return Err("type the path of a scene JSON file".to_owned());
     }
-    let path = app.cwd.join(name);
-    let scene = cloth_scene::load(&path.to_string_lossy(), &[]).map_err(|e| e.to_string())?;
+    let path = app.cwd.join(expand_home(name));
+    let scene = cloth_scene::load(&path.to_string_lossy(), &[]).map_err(|e| chain(&e))?;
     replace_scene(app, scene);
     Ok(())
 }
@@ -610,11 +904,22 @@ fn submit_open(app: &mut App, text: &str) -> Result<(), String> {
 fn open_scene(app: &mut App, name: &str) {
     match cloth_scene::load(name, &[]) {
         Ok(scene) => replace_scene(app, scene),
-        Err(e) => app.say(Level::Error, e.to_string()),
+        Err(e) => app.say(Level::Error, chain(&e)),
     }
 }
 
+/// Opens `scene`, asking first when its cloth is big.
 fn replace_scene(app: &mut App, scene: cloth_scene::Scene) {
+    let n = scene.mesh.len();
+    if n > BIG_CLOTH {
+        app.big = Some(Box::new(scene));
+        app.overlay = Overlay::ConfirmBig(n);
+        return;
+    }
+    start_scene(app, scene);
+}
+
+fn start_scene(app: &mut App, scene: cloth_scene::Scene) {
     let registry = app.sim.registry().clone();
     let mut fallback = false;
     let result = Simulation::new(scene.clone(), registry.clone(), None).or_else(|e| {
@@ -633,12 +938,22 @@ fn replace_scene(app: &mut App, scene: cloth_scene::Scene) {
     });
     match result {
         Ok(sim) => {
-            app.orbit = Orbit::course_default(&sim.scene.mesh);
+            app.orbit = Orbit::framing(&sim.scene.mesh, &sim.scene.colliders);
+            app.saved = (sim.settings.clone(), sim.entry().name());
+            app.undo.clear();
+            app.display = super::panes::Display::for_mesh(&sim.scene.mesh);
             app.sim = sim;
             app.selected = app.selected.min(row_count(&app.sim) - 1);
             app.extent = None;
             app.debt = 0.0;
             app.frames = [None, None, None, None];
+            app.stats.rates = super::worker::Rates::default();
+            if let Some(notify) = app.notify.clone()
+                && let Err(e) = app.start_worker(notify)
+            {
+                app.say(Level::Error, format!("{e:#}"));
+                return;
+            }
             if !fallback {
                 app.say(Level::Info, format!("opened {}", app.sim.scene.origin));
             }

@@ -6,6 +6,8 @@ mod panel;
 mod plots;
 mod status;
 
+pub use status::note_lines;
+
 use ratatui::Frame;
 use ratatui::layout::Rect;
 use ratatui::text::{Line, Span};
@@ -32,9 +34,10 @@ pub fn view(app: &App, f: &mut Frame) {
     plots::plots(app, f, r.plots, &theme);
     status::note(app, f, r.note, &theme);
     status::footer(f, r.footer, &theme);
+    // Boxes are centred between the status line and the message line.
     let body = Rect {
         y: r.title.y + 1,
-        height: area.height.saturating_sub(3),
+        height: r.note.y.saturating_sub(r.title.y + 1),
         ..area
     };
     match &app.overlay {
@@ -43,6 +46,8 @@ pub fn view(app: &App, f: &mut Frame) {
         Overlay::Picker(p) => overlay::picker(f, body, p, &theme),
         Overlay::Prompt(p) => overlay::prompt(app, f, body, p, &theme),
         Overlay::ConfirmOverwrite(path) => overlay::confirm(f, body, path, &theme),
+        Overlay::ConfirmDiscard(then) => overlay::discard(app, f, body, *then, &theme),
+        Overlay::ConfirmBig(points) => overlay::big(app, f, body, *points, &theme),
         Overlay::Fault => overlay::fault(app, f, body, &theme),
     }
 }

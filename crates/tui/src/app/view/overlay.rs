@@ -9,8 +9,8 @@ use ratatui::widgets::{Block, Clear, Paragraph, Wrap};
 
 use crate::app::keymap::{Group, KEYMAP, keys_label};
 use crate::app::layout::{MIN_HEIGHT, MIN_WIDTH};
-use crate::app::model::{App, Picker, Prompt, Purpose};
-use crate::app::params::{Kind, fmt_number, row};
+use crate::app::model::{App, Picker, Prompt, Purpose, Then};
+use crate::app::params::{Kind, fmt_number, is_option_row, row, row_count};
 use crate::app::theme::Theme;
 
 /// A box of `w` x `h` centred in `area` (clipped to it), cleared and bordered.
@@ -39,8 +39,11 @@ fn boxed(
     inside
 }
 
-/// The help, generated from [`KEYMAP`]: two columns when wide enough, else one that scrolls.
+/// The help, generated from [`KEYMAP`]: two columns when wide enough, else one that scrolls;
+/// the box fits its text, so it sits centred.
 pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
+    /// Columns between the two columns of keys.
+    const GAP: usize = 4;
     let key_w = KEYMAP
         .iter()
         .map(|b| keys_label(b).chars().count())
@@ -54,39 +57,46 @@ pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
                 Span::styled(b.help, theme.text),
             ]));
         }
-        v.push(Line::raw(""));
         v
     };
     let all: Vec<Vec<Line>> = Group::ALL.iter().map(|&g| group_lines(g)).collect();
-    let widest = KEYMAP
-        .iter()
-        .map(|b| b.help.chars().count())
-        .max()
-        .unwrap_or(40)
-        + key_w
-        + 4;
-    let total: usize = all.iter().map(Vec::len).sum();
-    let two = area.width as usize >= 2 * widest + 3;
-    let (left, right): (Vec<Line>, Vec<Line>) = if two {
-        // Split the groups where the left column holds about half the lines.
-        let mut l = Vec::new();
-        let mut r = Vec::new();
-        for g in all {
-            if l.len() + g.len() / 2 < total / 2 {
-                l.extend(g);
-            } else {
-                r.extend(g);
+    let width = |lines: &[Line]| lines.iter().map(Line::width).max().unwrap_or(0);
+    // Groups one after the other, a blank line between them.
+    let join = |groups: &[Vec<Line<'static>>]| -> Vec<Line<'static>> {
+        let mut out = Vec::new();
+        for (i, g) in groups.iter().enumerate() {
+            if i > 0 {
+                out.push(Line::raw(""));
             }
+            out.extend(g.iter().cloned());
         }
-        (l, r)
-    } else {
-        (all.into_iter().flatten().collect(), Vec::new())
+        out
     };
-    let rows = left.len().max(right.len()) as u16 + 1;
-    let w = if two {
-        2 * widest as u16 + 3
+    // Split the groups where the two columns come closest to equal.
+    let total: usize = all.iter().map(Vec::len).sum();
+    let mut split = 1;
+    let mut best = usize::MAX;
+    for k in 1..all.len() {
+        let left: usize = all[..k].iter().map(Vec::len).sum();
+        let diff = left.abs_diff(total - left);
+        if diff < best {
+            best = diff;
+            split = k;
+        }
+    }
+    let (left, right) = (join(&all[..split]), join(&all[split..]));
+    let two_w = width(&left) + GAP + width(&right) + 2;
+    let two = usize::from(area.width) >= two_w;
+    let (left, right) = if two {
+        (left, right)
     } else {
-        widest as u16 + 2
+        (join(&all), Vec::new())
+    };
+    let rows = left.len().max(right.len()) as u16;
+    let w = if two {
+        two_w as u16
+    } else {
+        width(&left) as u16 + 2
     };
     let inside = boxed(
         f,
@@ -98,16 +108,20 @@ pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     );
     let scroll = app.help_scroll.min(rows.saturating_sub(inside.height));
     if two {
-        let half = Rect {
-            width: inside.width / 2,
-            ..inside
-        };
-        f.render_widget(Paragraph::new(left).scroll((scroll, 0)), half);
+        let lw = width(&left) as u16;
+        f.render_widget(
+            Paragraph::new(left).scroll((scroll, 0)),
+            Rect {
+                width: lw.min(inside.width),
+                ..inside
+            },
+        );
+        let x = inside.x + (lw + GAP as u16).min(inside.width);
         f.render_widget(
             Paragraph::new(right).scroll((scroll, 0)),
             Rect {
-                x: inside.x + inside.width / 2 + 1,
-                width: inside.width - inside.width / 2 - 1,
+                x,
+                width: inside.right().saturating_sub(x),
                 ..inside
             },
         );
@@ -209,9 +223,15 @@ pub fn prompt(app: &App, f: &mut Frame, area: Rect, p: &Prompt, theme: &Theme) {
     let at: String = chars.get(p.cursor).map_or(" ".to_owned(), char::to_string);
     let after: String = chars.iter().skip(p.cursor + 1).collect();
     text.push(Span::styled("> ", theme.key));
-    text.push(Span::styled(before, theme.text));
-    text.push(Span::styled(at, theme.selected));
-    text.push(Span::styled(after, theme.text));
+    if p.selected {
+        // The pre-filled value, all selected: typing replaces it.
+        text.push(Span::styled(p.text.clone(), theme.selected));
+        text.push(Span::styled(" ", theme.text));
+    } else {
+        text.push(Span::styled(before, theme.text));
+        text.push(Span::styled(at, theme.selected));
+        text.push(Span::styled(after, theme.text));
+    }
     let mut lines = vec![
         Line::styled(question, theme.text),
         Line::raw(""),
@@ -222,7 +242,14 @@ pub fn prompt(app: &App, f: &mut Frame, area: Rect, p: &Prompt, theme: &Theme) {
         lines.push(Line::styled(e.clone(), theme.error));
         lines.push(Line::raw(""));
     }
-    lines.push(Line::styled("Enter accepts, Esc cancels", theme.dim));
+    lines.push(Line::styled(
+        if p.selected {
+            "type to replace, ←→ to edit; Enter accepts, Esc cancels"
+        } else {
+            "Enter accepts, Esc cancels; C-u clears, C-w deletes a word"
+        },
+        theme.dim,
+    ));
     f.render_widget(Paragraph::new(lines).wrap(Wrap { trim: false }), inside);
 }
 
@@ -246,6 +273,109 @@ pub fn confirm(f: &mut Frame, area: Rect, path: &Path, theme: &Theme) {
     );
 }
 
+/// Lines in a box of `w` columns (two of them border), wrapped: how many rows they take.
+fn rows_of(lines: &[Line], w: u16) -> u16 {
+    let text_w = usize::from(w.saturating_sub(2)).max(1);
+    lines
+        .iter()
+        .map(|l| {
+            let s: String = l.spans.iter().map(|s| s.content.as_ref()).collect();
+            crate::app::layout::wrapped_rows(&s, text_w).max(1)
+        })
+        .sum::<usize>() as u16
+}
+
+/// "Discard the unsaved edits?" before quitting or opening another scene.
+pub fn discard(app: &App, f: &mut Frame, area: Rect, then: Then, theme: &Theme) {
+    let key = |k: &'static str| Span::styled(k, theme.key);
+    let txt = |t: &'static str| Span::styled(t, theme.text);
+    let (what, again) = match then {
+        Then::Quit => ("quit", "q"),
+        Then::Open => ("open another scene", "o"),
+    };
+    // NOTE: option rows are the active solver's; after a solver switch the solver row says
+    // it, and the saved options (another solver's) are not compared.
+    let same_solver = app.sim.entry().name() == app.saved.1;
+    let edited: Vec<&str> = (0..row_count(&app.sim))
+        .map(|i| (i, row(&app.sim, i)))
+        .filter(|(i, p)| match p.kind {
+            Kind::Solver => !same_solver,
+            _ if is_option_row(*i) && !same_solver => false,
+            _ => (p.get)(&app.sim.settings) != (p.get)(&app.saved.0),
+        })
+        .map(|(_, p)| p.label)
+        .collect();
+    let lines = vec![
+        Line::styled(
+            format!(
+                "{} has unsaved edits ({}).",
+                app.sim.scene.origin,
+                edited.join(", ")
+            ),
+            theme.text,
+        ),
+        Line::raw(""),
+        Line::from(vec![
+            key(again),
+            txt(", "),
+            key("y"),
+            Span::styled(format!("    {what} and discard them"), theme.text),
+        ]),
+        Line::from(vec![key("S"), txt("       save them first")]),
+        Line::from(vec![key("Esc"), txt(", "), key("n"), txt("  keep editing")]),
+    ];
+    let w = area.width.saturating_sub(4).min(72);
+    let inside = boxed(
+        f,
+        area,
+        w,
+        rows_of(&lines, w) + 2,
+        "unsaved edits",
+        theme.warn,
+    );
+    f.render_widget(Paragraph::new(lines).wrap(Wrap { trim: false }), inside);
+}
+
+/// "This cloth is big: open it?"
+pub fn big(app: &App, f: &mut Frame, area: Rect, points: usize, theme: &Theme) {
+    let name = app
+        .big
+        .as_ref()
+        .map_or_else(String::new, |s| s.origin.clone());
+    // Positions, last positions and a copy for the screen: three vectors of 24 bytes a point,
+    // besides the springs (about six per point, 24 bytes each).
+    let mb = points as f64 * (3.0 * 24.0 + 6.0 * 24.0) / 1e6;
+    let lines = vec![
+        Line::styled(
+            format!(
+                "{name} has {points} points (more than {}). It will likely run slower than \
+                 real time and needs about {mb:.0} MB; the keys still answer at once.",
+                crate::app::update::BIG_CLOTH
+            ),
+            theme.text,
+        ),
+        Line::raw(""),
+        Line::from(vec![
+            Span::styled("y", theme.key),
+            Span::styled(" open it   ", theme.text),
+            Span::styled("n", theme.key),
+            Span::styled(" or ", theme.text),
+            Span::styled("Esc", theme.key),
+            Span::styled(" keep the current scene", theme.text),
+        ]),
+    ];
+    let w = area.width.saturating_sub(4).min(72);
+    let inside = boxed(
+        f,
+        area,
+        w,
+        rows_of(&lines, w) + 2,
+        "a big cloth",
+        theme.warn,
+    );
+    f.render_widget(Paragraph::new(lines).wrap(Wrap { trim: false }), inside);
+}
+
 /// What stopped the simulation and how to recover.
 pub fn fault(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     let Some(fault) = &app.sim.fault else {
@@ -259,44 +389,38 @@ pub fn fault(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
             theme.error,
         ),
         Line::raw(""),
+        Line::styled(format!("What to change: {}.", fault.advice), theme.warn),
+        Line::raw(""),
         Line::styled(
-            "The simulation is paused; the last good frame is shown. To recover:",
+            "The simulation is paused; the last good frame is shown.",
             theme.text,
         ),
         Line::from(vec![
-            key("  r  "),
+            key("  r      "),
             txt("reset the cloth to its start (your parameters are kept)"),
         ]),
         Line::from(vec![
-            key("  ←  "),
-            txt("lower ks, or raise steps/frame or density, then r"),
+            key("  ↑↓ ←→  "),
+            txt("select and change a parameter here; Enter types a value"),
         ]),
         Line::from(vec![
-            key("  U  "),
-            txt("restore every parameter to the scene's values, then r"),
-        ]),
-        Line::from(vec![
-            key("  Esc"),
-            txt(" close this message (stays paused)"),
+            key("  u U    "),
+            txt("undo the last edit / restore the scene's values"),
         ]),
     ];
-    if let Some(w) = app.sim.stability_warning() {
-        lines.insert(2, Line::styled(format!("Likely cause: {w}."), theme.warn));
+    if fault.resumable {
+        lines.push(Line::from(vec![
+            key("  space  "),
+            txt("go on anyway (this test stays off until r)"),
+        ]));
     }
+    lines.push(Line::from(vec![
+        key("  Esc    "),
+        txt("close this message (stays paused)"),
+    ]));
     let w = area.width.saturating_sub(4).min(90);
-    let text_w = usize::from(w.saturating_sub(2)).max(1);
-    let rows: usize = lines
-        .iter()
-        .map(|l| l.width().max(1).div_ceil(text_w))
-        .sum();
-    let inside = boxed(
-        f,
-        area,
-        w,
-        rows as u16 + 2,
-        "simulation stopped",
-        theme.error,
-    );
+    let rows = rows_of(&lines, w);
+    let inside = boxed(f, area, w, rows + 2, "simulation stopped", theme.error);
     f.render_widget(Paragraph::new(lines).wrap(Wrap { trim: false }), inside);
 }
 

@@ -83,15 +83,6 @@ pub fn params(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
             ..inside
         };
         let text = row(&app.sim, app.selected).help;
-        let w = usize::from(help.width);
-        // One line only: cut it visibly rather than mid-phrase.
-        let text = if help.height == 1 && text.chars().count() > w {
-            let mut t: String = text.chars().take(w.saturating_sub(1)).collect();
-            t.push('…');
-            t
-        } else {
-            text.to_owned()
-        };
         f.render_widget(
             Paragraph::new(Span::styled(text, theme.dim)).wrap(Wrap { trim: true }),
             help,

@@ -104,20 +104,44 @@ pub fn plots(app: &App, f: &mut Frame, areas: [Rect; 2], theme: &Theme) {
     if stretch.height >= 3 {
         let width = stretch.width.saturating_sub(2) as usize;
         let shown = columns(h, width, |s| s.stretch);
-        // NOTE: the plot spans rest length (1) to the 10 % limit, or higher if exceeded, so a
-        // cloth hanging at the limit reads as a full bar.
-        let top = shown.iter().copied().fold(MAX_STRETCH, f64::max);
+        // NOTE: the plot spans rest length (1) to twice the limit's excess (1.2), or higher
+        // when exceeded, so a cloth hanging at the limit fills half the height and the limit
+        // itself is a dashed line, not the plot's ceiling.
+        let top = shown
+            .iter()
+            .copied()
+            .fold(1.0 + 2.0 * (MAX_STRETCH - 1.0), f64::max);
         let data = shown
             .iter()
             .map(|&s| ((s - 1.0).max(0.0) / (top - 1.0) * LEVELS).round() as u64)
             .collect();
         let now = last.map_or(1.0, |s| s.stretch);
         let title = if width >= 30 {
-            format!(" max stretch {now:.3} (limit {MAX_STRETCH}) ")
+            format!(" max stretch {now:.3} (limit {MAX_STRETCH} ┄) ")
         } else {
             format!(" stretch {now:.3} ")
         };
         plot(f, stretch, title, data, theme, theme.plot_stretch);
+        limit_line(f, stretch, (MAX_STRETCH - 1.0) / (top - 1.0), theme);
+    }
+}
+
+/// A dashed line across the plot's empty cells at `fraction` of its height.
+fn limit_line(f: &mut Frame, area: Rect, fraction: f64, theme: &Theme) {
+    let inner = crate::app::layout::inner(area);
+    if inner.height == 0 {
+        return;
+    }
+    let from_bottom = ((fraction * f64::from(inner.height)).floor() as u16).min(inner.height - 1);
+    let y = inner.bottom() - 1 - from_bottom;
+    let buf = f.buffer_mut();
+    for x in inner.left()..inner.right() {
+        if let Some(cell) = buf.cell_mut((x, y))
+            && cell.symbol() == " "
+        {
+            cell.set_symbol("┄");
+            cell.set_style(theme.dim);
+        }
     }
 }
 

@@ -3,7 +3,7 @@
 use ratatui::Frame;
 use ratatui::layout::Rect;
 use ratatui::text::{Line, Span};
-use ratatui::widgets::Paragraph;
+use ratatui::widgets::{Paragraph, Wrap};
 
 use crate::app::keymap::KEYMAP;
 use crate::app::model::{App, Level};
@@ -43,36 +43,40 @@ pub fn title(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
             9,
             Span::styled(format!(" t {:.3} s ", sim.time), theme.text),
         ),
-        (
-            7,
-            Span::styled(
-                format!(
-                    " rtf {:.2}{} ",
-                    s.realtime_factor,
-                    if s.lagging { " lagging" } else { "" }
+    ];
+    // NOTE: rates are shown only for a running cloth once measured, so pausing does not
+    // leave the last second's figures standing as if current.
+    let r = &s.rates;
+    if app.running && r.measured {
+        if r.lagging {
+            fields.push((
+                9,
+                Span::styled(
+                    format!(" slower than real time: {:.2}x ", r.realtime_factor),
+                    theme.warn,
                 ),
-                if s.lagging { theme.warn } else { theme.text },
-            ),
-        ),
-        (
+            ));
+        } else {
+            fields.push((
+                7,
+                Span::styled(format!(" rtf {:.2} ", r.realtime_factor), theme.text),
+            ));
+        }
+        fields.push((
             5,
-            Span::styled(format!(" {:.0} steps/s ", s.steps_per_sec), theme.dim),
-        ),
-        (
+            Span::styled(format!(" {:.0} steps/s ", r.steps_per_sec), theme.dim),
+        ));
+    }
+    if s.draws_per_sec > 0.0 {
+        fields.push((
             6,
             Span::styled(format!(" {:.0} fps ", s.draws_per_sec), theme.dim),
-        ),
-    ];
+        ));
+    }
     if s.draw_ms > 0.0 {
         fields.push((
             1,
-            Span::styled(
-                format!(
-                    " draw {:.1} ms, sim budget {:.1} ms ",
-                    s.draw_ms, s.budget_ms
-                ),
-                theme.dim,
-            ),
+            Span::styled(format!(" draw {:.1} ms ", s.draw_ms), theme.dim),
         ));
     }
     let width = |f: &[(i32, Span)]| f.iter().map(|(_, s)| s.width()).sum::<usize>();
@@ -85,7 +89,7 @@ pub fn title(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     f.render_widget(Paragraph::new(Line::from(spans)), area);
 }
 
-/// The latest note, styled by level.
+/// The latest note, styled by level, as one line (see [`note_lines`]).
 pub fn note(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     let Some(n) = &app.note else {
         return;
@@ -96,9 +100,23 @@ pub fn note(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
         Level::Error => ("error: ", theme.error),
     };
     f.render_widget(
-        Paragraph::new(Line::styled(format!(" {mark}{}", n.text), style)),
+        Paragraph::new(Line::styled(format!(" {mark}{}", n.text), style)).wrap(Wrap { trim: true }),
         area,
     );
+}
+
+/// Rows the note needs at `width` columns when wrapped (at least one).
+pub fn note_lines(app: &App, width: u16) -> u16 {
+    let Some(n) = &app.note else {
+        return 1;
+    };
+    let mark = match n.level {
+        Level::Info => 0,
+        Level::Warn => 2,
+        Level::Error => 7,
+    };
+    let text = format!(" {}{}", " ".repeat(mark), n.text);
+    (crate::app::layout::wrapped_rows(&text, usize::from(width)) as u16).max(1)
 }
 
 /// The footer, from the keymap: as many bindings as fit.

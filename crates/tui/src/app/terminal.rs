@@ -1,0 +1,129 @@
+//! The terminal session: raw mode, the alternate screen, a hidden cursor and mouse capture,
+//! entered and left as one, however the program ends.
+//!
+//! [`Session::leave`] puts the terminal back and is safe to call twice; the session leaves on
+//! drop, and a panic hook leaves before the panic message is printed. Signals are the loop's
+//! business ([`super::runner`]): it leaves, then ends or stops the process.
+
+use std::io::{self, Write};
+
+use ratatui::Terminal;
+use ratatui::backend::CrosstermBackend;
+use ratatui::crossterm::cursor::{Hide, Show};
+use ratatui::crossterm::event::{DisableMouseCapture, EnableMouseCapture};
+use ratatui::crossterm::execute;
+use ratatui::crossterm::terminal::{
+    EnterAlternateScreen, LeaveAlternateScreen, disable_raw_mode, enable_raw_mode,
+};
+
+use super::sgr::Sgr16;
+
+/// The terminal the UI draws on.
+pub type Term = Terminal<CrosstermBackend<Sgr16<io::Stdout>>>;
+
+/// An entered terminal.
+pub struct Session {
+    /// The ratatui terminal.
+    pub terminal: Term,
+    mouse: bool,
+    entered: bool,
+}
+
+/// Puts the terminal back as the shell expects it; every step is tried whatever fails (on
+/// a closed terminal they all do).
+pub fn restore_terminal() {
+    let mut out = io::stdout();
+    let _ = execute!(out, DisableMouseCapture, LeaveAlternateScreen, Show);
+    let _ = disable_raw_mode();
+    let _ = out.flush();
+}
+
+/// Installs a panic hook that restores the terminal before the panic message prints.
+pub fn restore_on_panic() {
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        restore_terminal();
+        previous(info);
+    }));
+}
+
+fn enter(mouse: bool) -> io::Result<()> {
+    enable_raw_mode()?;
+    let mut out = io::stdout();
+    execute!(out, EnterAlternateScreen, Hide)?;
+    if mouse {
+        execute!(out, EnableMouseCapture)?;
+    }
+    Ok(())
+}
+
+impl Session {
+    /// Enters the terminal: raw mode, alternate screen, hidden cursor, mouse when `mouse`;
+    /// `sixteen` rewrites colours for a 16-colour terminal.
+    ///
+    /// # Errors
+    /// When the terminal refuses; it is left as it was.
+    pub fn enter(mouse: bool, sixteen: bool) -> io::Result<Self> {
+        if let Err(e) = enter(mouse) {
+            restore_terminal();
+            return Err(e);
+        }
+        let backend = CrosstermBackend::new(Sgr16::new(io::stdout(), sixteen));
+        match Terminal::new(backend) {
+            Ok(terminal) => Ok(Self {
+                terminal,
+                mouse,
+                entered: true,
+            }),
+            Err(e) => {
+                restore_terminal();
+                Err(e)
+            }
+        }
+    }
+
+    /// Leaves the terminal as the shell expects it (idempotent).
+    pub fn leave(&mut self) {
+        if self.entered {
+            self.entered = false;
+            restore_terminal();
+        }
+    }
+
+    /// Enters again after [`Self::leave`] (on resume) and redraws everything on the next draw.
+    ///
+    /// # Errors
+    /// When the terminal refuses.
+    pub fn resume(&mut self) -> io::Result<()> {
+        enter(self.mouse)?;
+        self.entered = true;
+        // NOTE: `Terminal::clear` asks the terminal where its cursor is, and the answer would
+        // be read by the input thread instead; a resize to the current size clears the screen
+        // and forgets what was drawn without asking.
+        let size = self.terminal.size()?;
+        self.terminal
+            .resize(ratatui::layout::Rect::new(0, 0, size.width, size.height))
+    }
+
+    /// Captures the mouse or frees it.
+    ///
+    /// # Errors
+    /// When the terminal cannot be written.
+    pub fn set_mouse(&mut self, on: bool) -> io::Result<()> {
+        if on != self.mouse {
+            self.mouse = on;
+            if on {
+                execute!(io::stdout(), EnableMouseCapture)?;
+            } else {
+                execute!(io::stdout(), DisableMouseCapture)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        self.leave();
+    }
+}

@@ -1,0 +1,454 @@
+//! A simulation on its own thread: the UI sends [`Command`]s and reads snapshots of it, so the
+//! keyboard is answered at once however long a step takes.
+//!
+//! A worker owns one [`Simulation`] and its clock: while running it owes `wall * rate`
+//! simulated seconds and pays them in fixed steps of `dt` (an accumulator); what it cannot pay
+//! within [`MAX_DEBT`] of wall time it forgives and reports as lagging, so a slow cloth runs
+//! below real time instead of falling ever further behind. Between any two steps it reads its
+//! commands, so a pause, an edit or a reset waits for one step at most.
+//!
+//! The UI asks for a snapshot when it is ready to draw ([`Worker::adopt_into`]); the worker
+//! publishes one after the next step (and at once after a stop or a single frame), swapping
+//! position buffers rather than allocating, so a big cloth costs one copy per drawn frame.
+//! Nothing here knows of the terminal: several workers can run side by side, each notifying
+//! the same loop.
+
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::time::{Duration, Instant};
+
+use super::sim::{Command, Simulation};
+
+/// Most wall time of owed simulation kept; beyond it the debt is forgiven (lagging).
+///
+/// NOTE: a quarter second keeps a brief hiccup (a slow draw, a busy machine) from losing
+/// simulated time, yet a cloth that cannot keep up falls at most this far behind.
+pub const MAX_DEBT: Duration = Duration::from_millis(250);
+
+/// How often the rates are measured.
+const WINDOW: Duration = Duration::from_secs(1);
+
+/// Longest a paused worker sleeps before looking at its stop flag again.
+const IDLE: Duration = Duration::from_millis(500);
+
+/// How fast a worker runs, measured over about a second of wall time.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Rates {
+    /// Simulated seconds per wall second, over the rate asked for (1 = keeping up).
+    pub realtime_factor: f64,
+    /// Solver steps per wall second.
+    pub steps_per_sec: f64,
+    /// Whether owed time was dropped because the steps could not keep up.
+    pub lagging: bool,
+    /// Whether the figures are measured (false until a second has passed since a change).
+    pub measured: bool,
+}
+
+/// What the UI learns from a snapshot besides the cloth itself.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Adopted {
+    /// Whether simulated time advances (a stop pauses it).
+    pub running: bool,
+    /// Errors of commands, for the message line.
+    pub errors: Vec<String>,
+    /// The latest rates.
+    pub rates: Rates,
+}
+
+/// What the worker published: everything the UI shows of the running cloth.
+#[derive(Debug, Default)]
+struct Published {
+    /// Positions at the end of the last step taken.
+    positions: Vec<cloth_solver::Vec3>,
+    time: f64,
+    steps: u64,
+    frames: u64,
+    history: std::collections::VecDeque<super::sim::Sample>,
+    peak_kinetic: f64,
+    fault: Option<super::sim::Fault>,
+    /// Whether simulated time is advancing (a stop pauses it).
+    running: bool,
+    rates: Rates,
+    /// Set by the worker when this is newer than what the UI last adopted.
+    fresh: bool,
+    /// Errors of commands, for the message line.
+    errors: Vec<String>,
+    /// Commands applied before this snapshot was taken.
+    applied: u64,
+}
+
+struct Shared {
+    published: Mutex<Published>,
+    /// The UI wants the next state (it has drawn the last one).
+    wanted: AtomicBool,
+    /// The UI is gone: end the thread.
+    stop: AtomicBool,
+}
+
+/// A simulation stepping on its own thread.
+pub struct Worker {
+    commands: Sender<Command>,
+    shared: Arc<Shared>,
+    /// Commands sent so far: a snapshot taken before the worker applied them all is stale.
+    sent: AtomicU64,
+}
+
+impl Worker {
+    /// Starts `sim` on a new thread, running or paused at `rate`; `notify` is called (on the
+    /// worker's thread) whenever a snapshot is ready.
+    ///
+    /// # Errors
+    /// When the thread cannot be started.
+    pub fn spawn(
+        sim: Simulation,
+        running: bool,
+        rate: f64,
+        notify: Box<dyn Fn() + Send>,
+    ) -> std::io::Result<Self> {
+        let (tx, rx) = mpsc::channel();
+        let shared = Arc::new(Shared {
+            published: Mutex::new(Published::default()),
+            wanted: AtomicBool::new(true),
+            stop: AtomicBool::new(false),
+        });
+        let inner = Arc::clone(&shared);
+        std::thread::Builder::new()
+            .name("clothsim-sim".to_owned())
+            .spawn(move || {
+                Stepper {
+                    sim,
+                    running,
+                    rate,
+                    commands: rx,
+                    shared: inner,
+                    notify,
+                    spare: Vec::new(),
+                }
+                .run();
+            })?;
+        Ok(Self {
+            commands: tx,
+            shared,
+            sent: AtomicU64::new(0),
+        })
+    }
+
+    /// Sends a command (taken before the next step).
+    pub fn send(&self, command: Command) {
+        // NOTE: a send fails only when the thread has ended (its simulation panicked); the
+        // UI then sees no more snapshots and says so rather than stopping here.
+        if self.commands.send(command).is_ok() {
+            self.sent.fetch_add(1, Ordering::AcqRel);
+        }
+    }
+
+    /// Whether the thread is still there to step.
+    pub fn alive(&self) -> bool {
+        Arc::strong_count(&self.shared) > 1
+    }
+
+    /// Moves the newest snapshot into `mirror` (the UI's copy, whose settings, scene and
+    /// solver the UI owns) and asks for the next; `None` when nothing new arrived.
+    pub fn adopt_into(&self, mirror: &mut Simulation) -> Option<Adopted> {
+        let mut p = self
+            .shared
+            .published
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        if !p.fresh {
+            return None;
+        }
+        p.fresh = false;
+        if p.applied < self.sent.load(Ordering::Acquire) {
+            // Taken before the worker saw the latest commands (a reset, a pause): showing it
+            // would undo them on screen for a moment. The next one follows at once.
+            drop(p);
+            self.shared.wanted.store(true, Ordering::Release);
+            return None;
+        }
+        std::mem::swap(&mut mirror.state.positions, &mut p.positions);
+        mirror.time = p.time;
+        mirror.steps = p.steps;
+        mirror.frames = p.frames;
+        mirror.history.clone_from(&p.history);
+        mirror.peak_kinetic = p.peak_kinetic;
+        mirror.fault.clone_from(&p.fault);
+        let adopted = Adopted {
+            running: p.running,
+            errors: std::mem::take(&mut p.errors),
+            rates: p.rates,
+        };
+        drop(p);
+        self.shared.wanted.store(true, Ordering::Release);
+        Some(adopted)
+    }
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        // The thread ends after its current step; it is not joined, so quitting never waits
+        // for a long step of a big cloth.
+        self.shared.stop.store(true, Ordering::Release);
+    }
+}
+
+/// The thread's side.
+struct Stepper {
+    sim: Simulation,
+    running: bool,
+    rate: f64,
+    commands: Receiver<Command>,
+    shared: Arc<Shared>,
+    notify: Box<dyn Fn() + Send>,
+    /// The buffer the next snapshot's positions are copied into.
+    spare: Vec<cloth_solver::Vec3>,
+}
+
+/// Rates over a window of wall time.
+struct Meter {
+    start: Instant,
+    steps: u64,
+    sim_time: f64,
+    lagging: bool,
+}
+
+impl Meter {
+    fn new(now: Instant) -> Self {
+        Self {
+            start: now,
+            steps: 0,
+            sim_time: 0.0,
+            lagging: false,
+        }
+    }
+}
+
+impl Stepper {
+    fn run(mut self) {
+        let mut errors = Vec::new();
+        let mut held: Option<Command> = None;
+        let mut debt = 0.0_f64;
+        let mut last = Instant::now();
+        let mut meter = Meter::new(last);
+        let mut rates = Rates::default();
+        let mut force = true;
+        let mut applied = 0_u64;
+        loop {
+            if self.shared.stop.load(Ordering::Acquire) {
+                return;
+            }
+            let mut pending: Vec<Command> = held.take().into_iter().collect();
+            if pending.is_empty() && !self.running && !force {
+                // Paused: nothing to do but wait for a command.
+                match self.commands.recv_timeout(IDLE) {
+                    Ok(c) => pending.push(c),
+                    Err(RecvTimeoutError::Timeout) => continue,
+                    Err(RecvTimeoutError::Disconnected) => return,
+                }
+            }
+            pending.extend(self.commands.try_iter());
+            for c in pending {
+                force = true;
+                applied += 1;
+                match c {
+                    Command::Run { running, rate } => {
+                        self.running = running && self.sim.fault.is_none();
+                        self.rate = rate;
+                        debt = 0.0;
+                        last = Instant::now();
+                        meter = Meter::new(last);
+                        rates = Rates::default();
+                    }
+                    other => {
+                        if matches!(other, Command::StepFrame) {
+                            self.running = false;
+                        }
+                        if matches!(other, Command::Reset | Command::StepFrame) {
+                            debt = 0.0;
+                        }
+                        if let Err(e) = self.sim.apply(other) {
+                            errors.push(e);
+                        }
+                    }
+                }
+            }
+
+            if self.running {
+                let now = Instant::now();
+                let wall = now.duration_since(last);
+                last = now;
+                debt += wall.as_secs_f64() * self.rate;
+                let cap = MAX_DEBT.as_secs_f64() * self.rate;
+                if debt > cap {
+                    debt = cap;
+                    meter.lagging = true;
+                }
+                let dt = self.sim.dt();
+                if debt >= dt {
+                    debt -= dt;
+                    let before = self.sim.time;
+                    if self.sim.step().is_err() {
+                        self.running = false;
+                        force = true;
+                    }
+                    meter.steps += 1;
+                    meter.sim_time += (self.sim.time - before).max(0.0);
+                } else {
+                    // Ahead of the clock: sleep until the next step is owed, or a command.
+                    let wait = Duration::from_secs_f64(((dt - debt) / self.rate).min(0.05));
+                    match self.commands.recv_timeout(wait) {
+                        Ok(c) => held = Some(c),
+                        Err(RecvTimeoutError::Timeout) => {}
+                        Err(RecvTimeoutError::Disconnected) => return,
+                    }
+                }
+                let now = Instant::now();
+                let span = now.duration_since(meter.start);
+                if span >= WINDOW {
+                    let s = span.as_secs_f64();
+                    rates = Rates {
+                        realtime_factor: meter.sim_time / s / self.rate,
+                        steps_per_sec: meter.steps as f64 / s,
+                        lagging: meter.lagging,
+                        measured: true,
+                    };
+                    meter = Meter::new(now);
+                }
+            }
+
+            if force || self.running && self.shared.wanted.load(Ordering::Acquire) {
+                self.publish(&mut errors, rates, applied);
+                force = false;
+            }
+        }
+    }
+
+    fn publish(&mut self, errors: &mut Vec<String>, rates: Rates, applied: u64) {
+        self.shared.wanted.store(false, Ordering::Release);
+        // NOTE: the copy is made before taking the lock, so the UI never waits on a big
+        // cloth's copy; the buffers then change hands.
+        self.spare.clone_from(&self.sim.state.positions);
+        {
+            let mut p = self
+                .shared
+                .published
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner);
+            std::mem::swap(&mut p.positions, &mut self.spare);
+            p.time = self.sim.time;
+            p.steps = self.sim.steps;
+            p.frames = self.sim.frames;
+            p.history.clone_from(&self.sim.history);
+            p.peak_kinetic = self.sim.peak_kinetic;
+            p.fault.clone_from(&self.sim.fault);
+            p.running = self.running;
+            p.rates = rates;
+            p.errors.append(errors);
+            p.applied = applied;
+            p.fresh = true;
+        }
+        (self.notify)();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::mpsc;
+    use std::time::Duration;
+
+    use cloth_mesh::ClothState;
+    use cloth_solver::advance_frame;
+
+    use super::*;
+
+    fn pinned4() -> Simulation {
+        let scene = cloth_scene::load("pinned4", &[]).unwrap();
+        Simulation::new(scene, crate::default_registry(), None).unwrap()
+    }
+
+    /// Waits for the worker's next current snapshot.
+    fn next(w: &Worker, rx: &mpsc::Receiver<()>, mirror: &mut Simulation) -> Adopted {
+        loop {
+            rx.recv_timeout(Duration::from_secs(60))
+                .expect("a snapshot within a minute");
+            if let Some(a) = w.adopt_into(mirror) {
+                return a;
+            }
+        }
+    }
+
+    #[test]
+    fn a_frame_stepped_on_the_worker_has_the_bits_of_the_headless_path() {
+        let (tx, rx) = mpsc::channel();
+        let tx = Mutex::new(tx);
+        let w = Worker::spawn(
+            pinned4(),
+            false,
+            1.0,
+            Box::new(move || {
+                let _ = tx.lock().unwrap().send(());
+            }),
+        )
+        .unwrap();
+        let mut mirror = pinned4();
+        w.send(Command::StepFrame);
+        let mut got = next(&w, &rx, &mut mirror);
+        while mirror.frames < 1 {
+            got = next(&w, &rx, &mut mirror);
+        }
+        assert!(!got.running);
+        assert_eq!(mirror.steps, 30);
+        let scene = cloth_scene::load("pinned4", &[]).unwrap();
+        let mut state = ClothState::new(&scene.mesh);
+        // The headless path builds the same solver the same way: through the registry.
+        let mut solver = crate::solvers::choose(&crate::default_registry(), &scene, None)
+            .unwrap()
+            .build(&scene.mesh)
+            .unwrap();
+        advance_frame(
+            solver.as_mut(),
+            &scene.mesh,
+            &scene.colliders,
+            &scene.params,
+            &mut state,
+        )
+        .unwrap();
+        assert_eq!(
+            mirror.state.positions, state.positions,
+            "same steps, same bits"
+        );
+    }
+
+    #[test]
+    fn a_running_worker_advances_and_a_reset_takes_it_back() {
+        let (tx, rx) = mpsc::channel();
+        let tx = Mutex::new(tx);
+        let w = Worker::spawn(
+            pinned4(),
+            true,
+            1.0,
+            Box::new(move || {
+                let _ = tx.lock().unwrap().send(());
+            }),
+        )
+        .unwrap();
+        let mut mirror = pinned4();
+        while mirror.frames < 3 {
+            next(&w, &rx, &mut mirror);
+        }
+        w.send(Command::Run {
+            running: false,
+            rate: 1.0,
+        });
+        w.send(Command::Reset);
+        let got = next(&w, &rx, &mut mirror);
+        assert!(!got.running);
+        assert_eq!(mirror.time, 0.0);
+        assert_eq!(
+            mirror.state.positions,
+            mirror.scene.mesh.start_positions(),
+            "a snapshot older than the reset is never shown"
+        );
+    }
+}
