@@ -118,19 +118,19 @@ fn fast_implicit_settles_pinned4_at_one_and_five_steps_per_frame() {
 }
 
 #[test]
-#[ignore = "long: every scene x step counts x switches (release: about a minute)"]
+#[ignore = "long, and not met yet: fast-implicit does not settle on every scene, step count and switch"]
 fn fast_implicit_is_finite_and_settles_on_every_scene_step_count_and_switch() {
     every_scene_at(&[1, 2, 5, 10, 30], &["fast-implicit"]);
 }
 
 #[test]
-#[ignore = "long: every scene x step counts x switches (release: several minutes)"]
+#[ignore = "long (release: several minutes); its outcome on every scene is open"]
 fn implicit_is_finite_and_settles_on_every_scene_step_count_and_switch() {
     every_scene_at(&[1, 2, 5, 10, 30], &["implicit"]);
 }
 
 #[test]
-#[ignore = "long: every scene at ks up to 1e6 (release: about a minute)"]
+#[ignore = "long, and not met yet: not every scene settles at ks up to 1e6 and one step per frame"]
 fn both_are_finite_and_settle_on_every_scene_at_stiff_springs_and_one_step_per_frame() {
     for b in BUNDLED {
         let scene = load(b.name);
@@ -227,7 +227,7 @@ fn fast_implicit_takes_over_from_verlet_at_any_frame_of_the_fall() {
 }
 
 #[test]
-#[ignore = "long: 91 swaps x 90 frames (release: several minutes)"]
+#[ignore = "long (release: several minutes); its outcome at every frame is open"]
 fn implicit_takes_over_from_verlet_at_any_frame_of_the_fall() {
     swap_at_every_frame(|| Box::new(ImplicitEuler::new()), "implicit");
 }
