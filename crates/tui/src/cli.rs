@@ -17,7 +17,7 @@ use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{CommandFactory as _, FromArgMatches, Parser, Subcommand};
 use clap_complete::Shell;
 use cloth_render::{ColorChoice, Mode, View};
-use cloth_solver::Registry;
+use cloth_solver::{OptionKind, Registry};
 
 use crate::{app, bench, render, scenes, simulate, solvers};
 /// A few typical command lines, printed at the end of the top-level help.
@@ -112,7 +112,31 @@ pub fn command(registry: &Registry) -> clap::Command {
         .map(|e| PossibleValue::new(e.name()).help(e.description()))
         .collect();
     let names = registry.names().collect::<Vec<_>>().join(", ");
+    let orders: Vec<PossibleValue> = registry
+        .entries()
+        .iter()
+        .filter_map(|e| e.option("order"))
+        .flat_map(|o| match o.kind {
+            OptionKind::Choice { choices, .. } => choices.to_vec(),
+            _ => Vec::new(),
+        })
+        .fold(Vec::new(), |mut all: Vec<&str>, c| {
+            if !all.contains(&c) {
+                all.push(c);
+            }
+            all
+        })
+        .into_iter()
+        .map(PossibleValue::new)
+        .collect();
     with_solver_values(Cli::command(), &values)
+        .mut_subcommand("bench", |bench| {
+            // `--order` takes the `order` option's values of the registered solvers.
+            bench.mut_arg("orders", |a| {
+                a.value_parser(PossibleValuesParser::new(orders))
+                    .ignore_case(true)
+            })
+        })
         .after_help(format!(
             "Solvers: {names} (their options: `clothsim solvers`).\n\n{EXAMPLES}"
         ))
@@ -289,16 +313,12 @@ fn vector_paths() -> String {
     let mut text = format!("{} compiled in ({})", compiled, std::env::consts::ARCH);
     #[cfg(target_arch = "x86_64")]
     {
-        let yes_no = |b: bool| if b { "present" } else { "absent" };
-        let avx2 = std::arch::is_x86_feature_detected!("avx2");
-        let avx512 = std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512vl");
-        let _ = write!(
-            text,
-            "; chosen at run time: avx2 ({} on this CPU), avx512vl ({} on this CPU)",
-            yes_no(avx2),
-            yes_no(avx512)
-        );
+        let avx2 = if std::arch::is_x86_feature_detected!("avx2") {
+            "present"
+        } else {
+            "absent"
+        };
+        let _ = write!(text, "; chosen at run time: avx2 ({avx2} on this CPU)");
     }
     text
 }
@@ -474,12 +494,18 @@ mod tests {
             );
         }
         let bench = long_help(Some("bench"));
-        for value in ["faithful", "parallel", "colored", "on", "off"] {
+        for value in ["on", "off"] {
             assert!(
                 bench.contains(&format!("- {value}:")),
                 "{value} in:\n{bench}"
             );
         }
+        // `--order` lists the registered solvers' `order` values (the help wraps: fold it).
+        let folded = bench.split_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(
+            folded.contains("[possible values: faithful, parallel, colored]"),
+            "{bench}"
+        );
         let completions = long_help(Some("completions"));
         for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
             assert!(completions.contains(shell), "{shell} in:\n{completions}");
