@@ -471,4 +471,36 @@ mod tests {
             "a snapshot older than the reset is never shown"
         );
     }
+
+    #[test]
+    fn the_mirror_gets_every_frame_s_row_once_and_a_reset_starts_the_table_again() {
+        let (tx, rx) = mpsc::channel();
+        let tx = Mutex::new(tx);
+        let w = Worker::spawn(
+            pinned4(),
+            false,
+            1.0,
+            Box::new(move || {
+                let _ = tx.lock().unwrap().send(());
+            }),
+        )
+        .unwrap();
+        let mut mirror = pinned4();
+        for _ in 0..3 {
+            w.send(Command::StepFrame);
+        }
+        while mirror.frames < 3 {
+            next(&w, &rx, &mut mirror);
+        }
+        let frames: Vec<u64> = mirror.record.iter().map(|r| r.frame).collect();
+        assert_eq!(frames, [0, 1, 2, 3], "each frame once, in order");
+        w.send(Command::Reset);
+        mirror.reset();
+        w.send(Command::StepFrame);
+        while mirror.frames < 1 {
+            next(&w, &rx, &mut mirror);
+        }
+        let frames: Vec<u64> = mirror.record.iter().map(|r| r.frame).collect();
+        assert_eq!(frames, [0, 1]);
+    }
 }
