@@ -340,3 +340,35 @@ fn a_diverged_run_keeps_no_animation_and_leaves_no_temporary_file() {
         "no cache, no mesh, no temporary file"
     );
 }
+
+#[cfg(unix)]
+#[test]
+fn a_folder_that_allows_no_new_file_is_refused_before_the_run() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let ro = dir.path().join("ro");
+    std::fs::create_dir(&ro).unwrap();
+    std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).unwrap();
+    // The superuser may create files in a read-only folder: then the cache is written.
+    let can_create = std::fs::File::create(ro.join("probe")).is_ok();
+    let _ = std::fs::remove_file(ro.join("probe"));
+    let pc2 = ro.join("x.pc2");
+    let o = clothsim(&[
+        "simulate",
+        "pinned4",
+        "--frames",
+        "1",
+        "--out",
+        pc2.to_str().unwrap(),
+    ]);
+    std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
+    if can_create {
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(names(&ro), ["x.obj", "x.pc2"]);
+    } else {
+        assert!(!o.status.success());
+        let e = stderr(&o);
+        assert!(e.contains("x.pc2: cannot create a file in"), "{e}");
+        assert!(names(&ro).is_empty());
+    }
+}
