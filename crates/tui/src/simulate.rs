@@ -169,6 +169,10 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         );
         if let Err(e) = advanced {
             progress.finish();
+            // The table records the run up to its last good frame, as for a divergence.
+            if let Some(table) = stats {
+                table.finish()?;
+            }
             return Err(e);
         }
         done = frame;

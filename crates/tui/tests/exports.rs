@@ -320,7 +320,7 @@ fn bad_export_arguments_are_one_clear_message_each() {
 }
 
 #[test]
-fn a_diverged_run_keeps_no_animation_and_leaves_no_temporary_file() {
+fn a_diverged_run_keeps_no_animation_but_keeps_the_table_of_its_good_frames() {
     let dir = tempfile::tempdir().unwrap();
     let pc2 = dir.path().join("x.pc2");
     let o = clothsim(&[
@@ -332,13 +332,18 @@ fn a_diverged_run_keeps_no_animation_and_leaves_no_temporary_file() {
         "cloth.ks=1e9",
         "--out",
         pc2.to_str().unwrap(),
+        "--stats",
+        dir.path().join("s.csv").to_str().unwrap(),
     ]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("diverged"), "{}", stderr(&o));
-    assert!(
-        names(dir.path()).is_empty(),
-        "no cache, no mesh, no temporary file"
+    assert_eq!(
+        names(dir.path()),
+        ["s.csv"],
+        "no cache, no mesh, no temporary file; the table of the frames before"
     );
+    let table = std::fs::read_to_string(dir.path().join("s.csv")).unwrap();
+    assert_eq!(table.lines().count(), 2, "the header and frame 1:\n{table}");
 }
 
 #[cfg(unix)]

@@ -90,7 +90,7 @@ impl AnimationKind {
         } else if digits.starts_with('0') && digits.len() <= 3 {
             digits.parse().unwrap_or(0)
         } else {
-            return bad("the width must be written 0N, at most 99 digits");
+            return bad("the width must be written 0N, as in %04d, and be at most 99");
         };
         Ok(Some(Self::ObjSequence {
             before: before.to_owned(),
