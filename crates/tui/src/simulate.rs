@@ -238,8 +238,12 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     };
     if let Some(what) = diverged {
         if animation.is_some() {
-            // Dropping the unfinished cache removes its temporary file.
+            // Dropping the unfinished cache removes its temporary file; the files of an OBJ
+            // sequence are each whole, and those written stay.
             drop(animation);
+            if matches!(format, Format::Animation(AnimationKind::ObjSequence { .. })) {
+                anyhow::bail!("{what}; the OBJ files of the frames before it were written");
+            }
             anyhow::bail!("{what}; the animation was not written");
         }
         // The state reached is kept under a name that says so, never as the result asked for.
