@@ -14,3 +14,8 @@ pub use animation::{Animation, AnimationKind, Sampling};
 pub use cast::{Cast, cast_frame, header as cast_header};
 pub use mesh_file::obj;
 pub use stats::{StatsFormat, StatsRow, StatsTable};
+
+/// A failed write to `path`, naming it.
+fn write_error(path: &std::path::Path, e: std::io::Error) -> anyhow::Error {
+    anyhow::Error::new(e).context(format!("{}: cannot write", path.display()))
+}

@@ -20,6 +20,7 @@ use anyhow::bail;
 use cloth_mesh::{ClothMesh, Vec3};
 
 use super::mesh_file::obj;
+use super::write_error;
 use crate::output::{self, StreamFile};
 
 /// Which animation format a `--out` names.
@@ -278,8 +279,4 @@ impl Animation {
         }
         Ok(())
     }
-}
-
-fn write_error(path: &Path, e: std::io::Error) -> anyhow::Error {
-    anyhow::Error::new(e).context(format!("{}: cannot write", path.display()))
 }

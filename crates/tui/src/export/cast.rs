@@ -15,6 +15,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
+use super::write_error;
 use crate::output::StreamFile;
 
 /// The header line of a recording `width` x `height` cells, newline included.
@@ -114,10 +115,6 @@ impl Cast {
     pub fn finish(self) -> anyhow::Result<()> {
         self.file.finish().map(drop)
     }
-}
-
-fn write_error(path: &Path, e: std::io::Error) -> anyhow::Error {
-    anyhow::Error::new(e).context(format!("{}: cannot write", path.display()))
 }
 
 #[cfg(test)]

@@ -24,6 +24,7 @@ use cloth_mesh::{ClothMesh, ClothState};
 use cloth_solver::{kinetic_energy, max_stretch_ratio};
 use serde::Serialize;
 
+use super::write_error;
 use crate::output::StreamFile;
 
 /// The columns, in order, as the CSV header names them.
@@ -208,10 +209,6 @@ impl StatsTable {
         }
         table.finish()
     }
-}
-
-fn write_error(path: &Path, e: std::io::Error) -> anyhow::Error {
-    anyhow::Error::new(e).context(format!("{}: cannot write", path.display()))
 }
 
 #[cfg(test)]
