@@ -16,6 +16,7 @@ mod message;
 mod model;
 mod panes;
 mod params;
+mod recording;
 mod runner;
 mod sgr;
 mod sim;
@@ -72,6 +73,11 @@ pub struct Args {
     #[arg(long, default_value = "ascii", ignore_case = true,
           value_parser = crate::cli::mode_parser())]
     pub mode: Mode,
+    /// Start from a state that `simulate` wrote (its positions and last positions, so the
+    /// cloth keeps its velocity) instead of the scene's flat start; its grid and pins must be
+    /// the scene's. The clock goes on from the state's time; R still resets to the flat start.
+    #[arg(long, value_name = "STATE.json", value_hint = clap::ValueHint::FilePath)]
+    pub from: Option<std::path::PathBuf>,
 }
 
 impl Default for Args {
@@ -85,6 +91,7 @@ impl Default for Args {
             color: ColorChoice::Auto,
             no_mouse: false,
             mode: Mode::Ascii,
+            from: None,
         }
     }
 }
@@ -101,7 +108,11 @@ pub fn build_in(
     env: &ColorEnv,
 ) -> anyhow::Result<App> {
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
-    let sim = Simulation::new(scene, registry.clone(), args.solver.as_deref())?;
+    let mut sim = Simulation::new(scene, registry.clone(), args.solver.as_deref())?;
+    if let Some(path) = &args.from {
+        let (file, state) = crate::state_file::StateFile::read(path, &sim.scene.mesh, sim.dt())?;
+        sim.start_from(state, file.frames, file.time);
+    }
     let mut app = App::new(sim, !args.paused);
     let depth = args.color.resolve(is_tty, env);
     app.color_allowed = depth != ColorDepth::None;

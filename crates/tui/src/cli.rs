@@ -28,6 +28,8 @@ Examples:
   clothsim my-scene.json --mode braille     a scene file, in braille dots
   clothsim render pinned4 --frames 200 --view all
   clothsim simulate sphere --set cloth.ks=20000 --out drape.obj
+  clothsim simulate sphere --every 3 --out drape.pc2 --stats drape.csv
+  clothsim render sphere --every 3 --format cast > sphere.cast
   clothsim bench --grid 50 --grid 128
   clothsim completions bash > ~/.local/share/bash-completion/completions/clothsim";
 

@@ -22,6 +22,7 @@
 mod app;
 mod bench;
 mod cli;
+mod export;
 mod guard;
 mod headless;
 mod output;

@@ -1,7 +1,8 @@
 //! `clothsim render`: simulate a scene headless and print its frames as text.
 //!
 //! Plain text by default: each frame is exactly H lines of W columns, frames are separated by a
-//! line holding only a form feed (`\x0c`). `--format ansi` adds colour escapes. Never touches
+//! line holding only a form feed (`\x0c`). `--format ansi` adds colour escapes; `--format cast`
+//! writes an asciinema v2 recording of the same frames at their simulated times. Never touches
 //! terminal modes, so it works the same into a pipe or a file.
 
 use std::fmt::Write as _;
@@ -18,7 +19,7 @@ use crate::guard::{Divergence, Guard};
 use crate::output::Stdout;
 use crate::progress::{Progress, When};
 use crate::state_file::StateFile;
-use crate::{headless, solvers};
+use crate::{export, headless, solvers};
 
 /// Columns between the panels of `--view all`.
 const GAP: &str = " | ";
@@ -65,6 +66,9 @@ pub enum Format {
     Plain,
     /// Glyphs with SGR colour escapes (depth from `--color`).
     Ansi,
+    /// An asciinema v2 recording (`asciinema play FILE`): a header line, then each frame as an
+    /// event at its simulated time, with colour as for `ansi`.
+    Cast,
 }
 
 /// Arguments of `clothsim render`.
@@ -137,7 +141,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let depth = match args.format {
         Format::Plain => ColorDepth::None,
         // The user asked for escapes, so a pipe does not turn them off; NO_COLOR still does.
-        Format::Ansi => {
+        Format::Ansi | Format::Cast => {
             let env = ColorEnv::read(|k| std::env::var(k).ok());
             match args.color.resolve(true, &env) {
                 // Escapes asked for, and TERM says nothing of the reader: 256 colours.
@@ -180,7 +184,20 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let mut text = String::new();
     let mut out = Stdout::new();
     let mut first = true;
-    let diverged = simulate(&scene, &choice, args, &start, |_, state| {
+    if args.format == Format::Cast {
+        let (width, height) = if views.len() == 1 {
+            (args.size.width, args.size.height)
+        } else {
+            (
+                views.len() * args.size.width + (views.len() - 1) * GAP.chars().count(),
+                args.size.height + 1,
+            )
+        };
+        out.write_all_or_fail(export::cast_header(width, height, &scene.origin).as_bytes())?;
+    }
+    let cast = args.format == Format::Cast;
+    let fps = scene.params.frames_per_sec;
+    let diverged = simulate(&scene, &choice, args, &start, |f, state| {
         let now = Bounds::of_scene(&state.positions, &scene.colliders)?;
         let fitted = extent.map_or(now, |e| e.union(&now));
         if extent.is_some() {
@@ -194,15 +211,18 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             renderer.render(&scene.mesh, state, &scene.colliders, &spec, &options, panel)?;
         }
         text.clear();
-        if !first {
+        if !first && !cast {
             text.push_str("\x0c\n");
         }
-        first = false;
         if views.len() == 1 {
             panels[0].write_ansi(&mut text, depth)?;
         } else {
             side_by_side(&views, &panels, args.size, depth, &mut text)?;
         }
+        if cast {
+            text = export::cast_frame(f as f64 / fps, &text, first);
+        }
+        first = false;
         // A reader that stops early (`| head`) ends the run here: main treats it as a
         // normal end. Each frame is flushed, so a reader sees it as soon as it is made.
         out.write_all_or_fail(text.as_bytes())?;

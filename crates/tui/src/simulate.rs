@@ -1,16 +1,16 @@
 //! `clothsim simulate`: run a scene headless and write its final state.
 
-use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::PathBuf;
 
-use cloth_mesh::{ClothMesh, ClothState, vertex_normals};
+use cloth_mesh::ClothState;
 use cloth_solver::Registry;
 
+use crate::export::{Animation, AnimationKind, Sampling, StatsFormat, StatsRow, StatsTable};
 use crate::guard::Guard;
 use crate::progress::{Progress, When};
 use crate::state_file::StateFile;
-use crate::{headless, output, solvers};
+use crate::{export, headless, output, solvers};
 
 /// Arguments of `clothsim simulate`.
 #[derive(Debug, clap::Args)]
@@ -28,10 +28,20 @@ pub struct Args {
     /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).
     #[arg(long)]
     solver: Option<String>,
-    /// Where to write the final state: a `.json` file (positions and last positions) or a
-    /// `.obj` file (mesh). Without it, JSON goes to stdout.
+    /// Where to write the run: the final state as a `.json` file (positions and last
+    /// positions) or an `.obj` file (mesh with texture coordinates and normals); or the
+    /// animation as a `.pc2` (Blender's Point Cache 2) or `.mdd` point cache (with the first
+    /// frame's mesh next to it as `NAME.obj`), or as one OBJ per frame through a pattern such as
+    /// `frames/f_%04d.obj`. Without it, JSON goes to stdout.
     #[arg(long, value_name = "FILE", value_hint = clap::ValueHint::FilePath)]
     out: Option<PathBuf>,
+    /// With an animation `--out`: keep every K-th frame (the start, K, 2K, ...).
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..))]
+    every: Option<u64>,
+    /// Write one row of numbers per frame to a `.csv` or `.json` file: time, kinetic energy,
+    /// largest stretch, lowest and centre heights, steps and the frame's wall time.
+    #[arg(long, value_name = "FILE", value_hint = clap::ValueHint::FilePath)]
+    stats: Option<PathBuf>,
     /// Start from a state that `simulate` wrote (its positions and last positions, so the
     /// cloth keeps its velocity) instead of the scene's flat start; its grid and pins must be
     /// the scene's. The frames and time written continue from the state's.
@@ -47,30 +57,54 @@ pub struct Args {
 enum Format {
     Json,
     Obj,
+    Animation(AnimationKind),
+}
+
+/// The format `--out` asks for.
+fn format_of(out: Option<&std::path::Path>) -> anyhow::Result<Format> {
+    let Some(p) = out else {
+        return Ok(Format::Json);
+    };
+    if let Some(kind) = AnimationKind::of(p)? {
+        return Ok(Format::Animation(kind));
+    }
+    match p
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("json") => Ok(Format::Json),
+        Some("obj") => Ok(Format::Obj),
+        _ => anyhow::bail!(
+            "--out {}: the file name must end in .json or .obj (the final state), .pc2 or .mdd \
+             (an animation), or be an OBJ sequence pattern such as frames/f_%04d.obj",
+            p.display()
+        ),
+    }
 }
 
 /// Runs the command.
 pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     // Decide the output format before spending time simulating.
-    let format = match &args.out {
-        None => Format::Json,
-        Some(p) => match p
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            .as_deref()
-        {
-            Some("json") => Format::Json,
-            Some("obj") => Format::Obj,
-            _ => anyhow::bail!(
-                "--out {}: the file name must end in .json or .obj",
-                p.display()
-            ),
-        },
-    };
+    let format = format_of(args.out.as_deref())?;
+    if args.every.is_some() && !matches!(format, Format::Animation(_)) {
+        anyhow::bail!(
+            "--every applies to an animation: give --out a .pc2 or .mdd file or a pattern such \
+             as frames/f_%04d.obj"
+        );
+    }
+    if let Some(path) = &args.stats {
+        StatsFormat::of(path)?;
+        output::check_target(path)?;
+    }
     if let Some(path) = &args.out {
         // Before the run, so a long simulation does not end in a folder given as the file.
-        output::check_target(path)?;
+        if !matches!(format, Format::Animation(AnimationKind::ObjSequence { .. })) {
+            output::check_target(path)?;
+        }
+    }
+    if args.out.is_some() || args.stats.is_some() {
         output::cleanup_on_signals()?;
     }
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
@@ -98,9 +132,32 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     );
     let mut guard = Guard::new();
     let point_mass = scene.mesh.point_mass(params.density);
+    let every = args.every.unwrap_or(1);
+    let mut animation = match (&format, &args.out) {
+        (Format::Animation(kind), Some(path)) => {
+            let sampling = Sampling {
+                first_frame: start_frames,
+                every,
+                samples: args.frames / every + 1,
+                frames_per_sec: params.frames_per_sec,
+            };
+            let mut a = Animation::create(
+                kind.clone(),
+                path,
+                scene.mesh.len(),
+                sampling,
+                &scene.origin,
+            )?;
+            a.push(&scene.mesh, start_frames, &state.positions)?;
+            Some(a)
+        }
+        _ => None,
+    };
+    let mut stats = args.stats.as_deref().map(StatsTable::create).transpose()?;
     let mut diverged = None;
     let mut done = 0;
     for frame in 1..=args.frames {
+        let started = std::time::Instant::now();
         let advanced = headless::advance_frame(
             solver.as_mut(),
             &scene,
@@ -112,6 +169,10 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         );
         if let Err(e) = advanced {
             progress.finish();
+            // The table records the run up to its last good frame, as for a divergence.
+            if let Some(table) = stats {
+                table.finish()?;
+            }
             return Err(e);
         }
         done = frame;
@@ -120,8 +181,29 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             diverged = Some((time, d));
             break;
         }
+        if let Some(table) = stats.as_mut() {
+            table.push(&StatsRow::measure(
+                &scene.mesh,
+                &state,
+                point_mass,
+                params.dt(),
+                start_frames + frame,
+                start_time + time,
+                u64::from(params.steps_per_frame),
+                Some(started.elapsed().as_secs_f64()),
+            ))?;
+        }
+        if let Some(a) = animation.as_mut()
+            && frame.is_multiple_of(every)
+        {
+            a.push(&scene.mesh, start_frames + frame, &state.positions)?;
+        }
     }
     progress.finish();
+    // The table records the run, a diverged one too (up to its last good frame).
+    if let Some(table) = stats {
+        table.finish()?;
+    }
     let diverged = diverged.map(|(time, d)| {
         format!(
             "{}: the run diverged at frame {done} of {} (t = {time:.3} s): {}; {}",
@@ -146,9 +228,24 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             s.push('\n');
             s.into_bytes()
         }
-        Format::Obj => obj(&scene.mesh, &state, &scene.origin).into_bytes(),
+        Format::Obj => export::obj(
+            &scene.mesh,
+            &state.positions,
+            &format!("{} after {done} frames", scene.origin),
+        )
+        .into_bytes(),
+        Format::Animation(_) => Vec::new(),
     };
     if let Some(what) = diverged {
+        if animation.is_some() {
+            // Dropping the unfinished cache removes its temporary file; the files of an OBJ
+            // sequence are each whole, and those written stay.
+            drop(animation);
+            if matches!(format, Format::Animation(AnimationKind::ObjSequence { .. })) {
+                anyhow::bail!("{what}; the OBJ files of the frames before it were written");
+            }
+            anyhow::bail!("{what}; the animation was not written");
+        }
         // The state reached is kept under a name that says so, never as the result asked for.
         if let Some(path) = &args.out {
             let kept = diverged_name(path);
@@ -159,6 +256,9 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             "{what}; nothing was written (with --out FILE the state it reached is kept as \
              FILE.diverged)"
         );
+    }
+    if let Some(a) = animation {
+        return a.finish();
     }
     if let Some(path) = &args.out {
         let written = output::write_atomic(path, &bytes)?;
@@ -187,23 +287,4 @@ fn diverged_name(path: &std::path::Path) -> PathBuf {
         name.push(ext);
     }
     path.with_file_name(name)
-}
-
-/// A Wavefront OBJ of the cloth: vertices, area-weighted normals and the mesh's triangles.
-fn obj(mesh: &ClothMesh, state: &ClothState, origin: &str) -> String {
-    let mut normals = Vec::new();
-    vertex_normals(mesh, &state.positions, &mut normals);
-    let mut s = String::with_capacity(mesh.len() * 80);
-    let _ = writeln!(s, "# clothsim final state of {origin}");
-    for p in &state.positions {
-        let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
-    }
-    for n in &normals {
-        let _ = writeln!(s, "vn {} {} {}", n.x, n.y, n.z);
-    }
-    for t in mesh.triangles() {
-        let [a, b, c] = t.map(|i| i + 1);
-        let _ = writeln!(s, "f {a}//{a} {b}//{b} {c}//{c}");
-    }
-    s
 }

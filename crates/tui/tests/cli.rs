@@ -96,14 +96,15 @@ fn simulate_writes_obj_and_json_files_atomically() {
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&obj).unwrap();
     assert_eq!(text.lines().filter(|l| l.starts_with("v ")).count(), 2500);
+    assert_eq!(text.lines().filter(|l| l.starts_with("vt ")).count(), 2500);
     assert_eq!(text.lines().filter(|l| l.starts_with("vn ")).count(), 2500);
     assert_eq!(
         text.lines().filter(|l| l.starts_with("f ")).count(),
         2 * 49 * 49
     );
     assert!(
-        text.contains("\nf 1//1 51//51 2//2\n"),
-        "first triangle is (A, C, B), 1-based"
+        text.contains("\nf 1/1/1 51/51/51 2/2/2\n"),
+        "first triangle is (A, C, B), 1-based, each point with its texture coordinate and normal"
     );
     // Only the result is left in the folder: the temporary file was renamed into place.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);

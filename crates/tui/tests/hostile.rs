@@ -263,3 +263,48 @@ fn values_out_of_range_are_reported_as_typed() {
         "no UI-only advice in a headless command: {e}"
     );
 }
+
+#[test]
+fn a_signal_during_a_streamed_cache_removes_its_temporary_file_and_keeps_the_old_one() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("drape.pc2");
+    std::fs::write(&out, "precious").unwrap();
+    // The cache's temporary file exists for the whole run, which is far longer than the wait.
+    let mut child = Command::new(BIN)
+        .args(["simulate", "pinned4", "--frames", "1000000", "--out"])
+        .arg(&out)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(120);
+    let is_tmp = |n: &std::ffi::OsStr| n.to_string_lossy().contains(".clothsim-tmp.");
+    let mut caught = false;
+    while Instant::now() < deadline && child.try_wait().unwrap().is_none() {
+        if std::fs::read_dir(dir.path())
+            .unwrap()
+            .any(|e| is_tmp(&e.unwrap().file_name()))
+        {
+            let sent = Command::new("kill")
+                .args(["-TERM", &child.id().to_string()])
+                .status()
+                .unwrap();
+            assert!(sent.success());
+            caught = true;
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    if !caught {
+        let _ = child.kill();
+    }
+    let status = child.wait().unwrap();
+    assert!(caught, "the temporary file was never seen");
+    assert_eq!(status.signal(), Some(15), "ended by SIGTERM");
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "precious");
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names, ["drape.pc2"], "no temporary file, no mesh");
+}

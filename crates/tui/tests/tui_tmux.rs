@@ -465,3 +465,41 @@ fn a_dumb_terminal_is_refused_with_a_pointer_to_render() {
         "no alternate screen, no mouse:\n{s}"
     );
 }
+
+#[test]
+fn r_records_the_screen_to_a_cast_file_named_in_the_status_line() {
+    let Some(t) = Tmux::start("record", 100, 30) else {
+        return;
+    };
+    t.clothsim("tui pinned4 --paused");
+    t.keys(&["R"]);
+    t.wait_for("the recording", ANSWER, |s| s.contains("REC pinned4.cast"));
+    t.keys(&["n"]);
+    t.wait_for("a frame", ANSWER, |s| s.contains("t 0.011 s"));
+    t.keys(&["R"]);
+    t.wait_for("the kept recording", ANSWER, |s| {
+        s.contains("recording saved to")
+    });
+    t.keys(&["q"]);
+    t.wait_for("the shell", ANSWER, |s| s.contains("exit=0"));
+    let text = std::fs::read_to_string(t.dir.path().join("pinned4.cast")).unwrap();
+    let mut lines = text.lines();
+    let head: serde_json::Value = serde_json::from_str(lines.next().unwrap()).unwrap();
+    assert_eq!(head["version"], 2);
+    assert_eq!(
+        (head["width"].as_u64(), head["height"].as_u64()),
+        (Some(100), Some(30))
+    );
+    let events: Vec<(f64, String, String)> =
+        lines.map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert!(events.len() >= 2, "the screen before and after the frame");
+    assert!(
+        events.windows(2).all(|w| w[0].0 <= w[1].0),
+        "times in order"
+    );
+    assert!(events[0].2.contains("REC pinned4.cast"));
+    assert!(
+        events.iter().any(|e| e.2.contains("t 0.011 s")),
+        "the stepped frame is in the recording"
+    );
+}

@@ -405,6 +405,20 @@ pub const KEYMAP: &[Binding] = &[
         group: Group::General,
         message: Message::Save,
     },
+    Binding {
+        keys: &[ch('e')],
+        help: "write the plots' numbers per frame to CSV",
+        footer: None,
+        group: Group::General,
+        message: Message::WriteStats,
+    },
+    Binding {
+        keys: &[ch('R')],
+        help: "record the screen to a .cast file / stop",
+        footer: None,
+        group: Group::General,
+        message: Message::ToggleRecording,
+    },
 ];
 
 /// The message bound to `ev` on the main screen.

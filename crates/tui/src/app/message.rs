@@ -72,6 +72,10 @@ pub enum Message {
     OpenPicker,
     /// Save the scene with its live parameters.
     Save,
+    /// Write the plots' numbers, one row per frame of the run so far, to a CSV file.
+    WriteStats,
+    /// Start recording the screen to a `.cast` file, or stop and keep it.
+    ToggleRecording,
     /// A character typed into the prompt.
     Input(char),
     /// Delete the character before the prompt's cursor.

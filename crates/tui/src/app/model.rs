@@ -271,6 +271,8 @@ pub struct App {
     pub sent: (Settings, &'static str),
     /// Scenes the picker offers to open a file from, and where save writes by default.
     pub cwd: PathBuf,
+    /// The screen recording in progress (R starts and stops it).
+    pub recording: Option<super::recording::Recording>,
 }
 
 impl App {
@@ -287,6 +289,7 @@ impl App {
             mouse: true,
             step_note: false,
             worker: None,
+            recording: None,
             notify: None,
             big: None,
             sim,
@@ -335,8 +338,9 @@ impl App {
         }
     }
 
-    /// Moves the stepping of the cloth to a worker thread (replacing any worker), starting
-    /// from the start positions with the live settings and solver.
+    /// Moves the stepping of the cloth to a worker thread (replacing any worker), going on
+    /// from the cloth's state (the start positions, or the state `--from` gave) with the live
+    /// settings and solver.
     ///
     /// # Errors
     /// When the solver cannot be built or the thread cannot start.
@@ -349,6 +353,7 @@ impl App {
         sim.settings.clone_from(&self.sim.settings);
         // The live solver options may differ from the scene's: build with the live ones.
         sim.apply_options()?;
+        sim.start_from(self.sim.state.clone(), self.sim.frames, self.sim.time);
         let n = std::sync::Arc::clone(&notify);
         self.worker = Some(Worker::spawn(
             sim,
@@ -359,6 +364,14 @@ impl App {
         self.sent = (self.sim.settings.clone(), self.sim.entry().name());
         self.notify = Some(notify);
         Ok(())
+    }
+
+    /// Ends the screen recording, if one is in progress, keeping its file; its path or why it
+    /// could not be kept.
+    pub fn stop_recording(&mut self) -> Option<anyhow::Result<PathBuf>> {
+        self.recording
+            .take()
+            .map(super::recording::Recording::finish)
     }
 
     /// Sends the worker the live settings and solver if they changed since last sent.

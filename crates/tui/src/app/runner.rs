@@ -10,7 +10,7 @@
 //! a panic) the terminal is restored first. Ctrl-Z and SIGTSTP leave the terminal as the shell
 //! wants it and stop the process; on SIGCONT the loop enters it again and redraws.
 
-use std::io;
+use std::io::{self, Write as _};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::time::{Duration, Instant};
 
@@ -21,7 +21,7 @@ use ratatui::crossterm::terminal::{BeginSynchronizedUpdate, EndSynchronizedUpdat
 use ratatui::layout::Rect;
 
 use super::escape::Joiner;
-use super::model::{App, Stats};
+use super::model::{App, Level, Stats};
 use super::terminal::{self, Session};
 use super::{Message, input, panes, update, view};
 
@@ -68,9 +68,24 @@ pub fn run(mut app: App, fps: u32) -> anyhow::Result<()> {
     let mut session = Session::enter(app.mouse, sixteen).context("cannot set up the terminal")?;
     spawn_input(tx).context("cannot read the keyboard")?;
     let end = event_loop(&mut session, &mut app, fps, &rx);
+    // A recording ends with the UI, kept as far as it went.
+    let recorded = app.stop_recording();
     session.leave();
     drop(session);
     signals.close();
+    match recorded {
+        Some(Ok(path)) => {
+            let _ = writeln!(
+                std::io::stderr(),
+                "clothsim: the screen recording is in {}",
+                path.display()
+            );
+        }
+        Some(Err(e)) => {
+            let _ = writeln!(std::io::stderr(), "clothsim: {e:#}");
+        }
+        None => {}
+    }
     match end? {
         End::Quit => Ok(()),
         End::Signal(sig) => {
@@ -233,7 +248,13 @@ fn event_loop(
             let size = session.terminal.size()?;
             panes::prepare(app, Rect::new(0, 0, size.width, size.height));
             execute!(session.terminal.backend_mut(), BeginSynchronizedUpdate)?;
-            session.terminal.draw(|f| view(app, f))?;
+            let drawn = session.terminal.draw(|f| view(app, f))?;
+            if let Some(r) = app.recording.as_mut()
+                && let Err(e) = r.frame(drawn.buffer, now)
+            {
+                app.recording = None;
+                app.say(Level::Error, format!("{e:#}; the recording stopped"));
+            }
             execute!(session.terminal.backend_mut(), EndSynchronizedUpdate)?;
             dirty = false;
             urgent = false;

@@ -8,10 +8,11 @@ use std::collections::VecDeque;
 
 use cloth_mesh::ClothState;
 use cloth_scene::Scene;
-use cloth_solver::{Registry, Solver, SolverEntry, kinetic_energy, max_stretch_ratio};
+use cloth_solver::{Registry, Solver, SolverEntry};
 use serde_json::Value;
 
 use super::params::Settings;
+use crate::export::StatsRow;
 use crate::guard::{Divergence, Guard};
 use crate::solvers::{self, Choice};
 
@@ -89,6 +90,11 @@ pub struct Simulation {
     step_in_frame: u32,
     /// Plot samples, oldest first.
     pub history: VecDeque<Sample>,
+    /// Every frame's row of numbers since the start or the last reset (the table the plots'
+    /// key writes).
+    pub record: Vec<StatsRow>,
+    /// Counts resets (and starts from a state): a new count means a new [`Self::record`].
+    pub generation: u64,
     /// Largest kinetic energy since the start or the last reset, J (the energy plot's scale,
     /// so a settled cloth reads as zero rather than as rescaled round-off).
     pub peak_kinetic: f64,
@@ -124,6 +130,8 @@ impl Simulation {
             frames: 0,
             step_in_frame: 0,
             history: VecDeque::with_capacity(HISTORY),
+            record: Vec::new(),
+            generation: 0,
             peak_kinetic: 0.0,
             fault: None,
             guard: Guard::new(),
@@ -229,6 +237,25 @@ impl Simulation {
         }
     }
 
+    /// Carries on from `state`, reached after `frames` frames (`time` seconds) of the scene:
+    /// what `--from` gives. The plots start again from it.
+    pub fn start_from(&mut self, state: ClothState, frames: u64, time: f64) {
+        self.state = state;
+        self.last_good.clone_from(&self.state);
+        self.solver.reset();
+        self.time = time;
+        self.frames = frames;
+        self.steps = frames.saturating_mul(u64::from(self.settings.params.steps_per_frame));
+        self.step_in_frame = 0;
+        self.history.clear();
+        self.record.clear();
+        self.generation += 1;
+        self.peak_kinetic = 0.0;
+        self.fault = None;
+        self.guard.rearm();
+        self.sample();
+    }
+
     /// Back to the start positions at rest, keeping the live settings (the course's R key).
     pub fn reset(&mut self) {
         self.state.reset(&self.scene.mesh);
@@ -239,6 +266,8 @@ impl Simulation {
         self.frames = 0;
         self.step_in_frame = 0;
         self.history.clear();
+        self.record.clear();
+        self.generation += 1;
         self.peak_kinetic = 0.0;
         self.fault = None;
         self.guard.rearm();
@@ -356,19 +385,37 @@ impl Simulation {
         Ok(())
     }
 
-    fn measure(&self) -> Sample {
-        Sample {
-            time: self.time,
-            kinetic: kinetic_energy(&self.state, self.point_mass(), self.dt()),
-            stretch: max_stretch_ratio(&self.scene.mesh, &self.state),
-        }
+    /// The row of the frame just ended (of the start, before any step); the wall time is the
+    /// caller's to measure, so it is left out.
+    fn measure(&self) -> StatsRow {
+        let steps = if self.steps == 0 {
+            0
+        } else {
+            u64::from(self.settings.params.steps_per_frame)
+        };
+        StatsRow::measure(
+            &self.scene.mesh,
+            &self.state,
+            self.point_mass(),
+            self.dt(),
+            self.frames,
+            self.time,
+            steps,
+            None,
+        )
     }
 
-    fn push(&mut self, s: Sample) {
+    fn push(&mut self, row: StatsRow) {
         if self.history.len() == HISTORY {
             self.history.pop_front();
         }
+        let s = Sample {
+            time: row.time_s,
+            kinetic: row.kinetic_energy_j,
+            stretch: row.max_stretch,
+        };
         self.history.push_back(s);
+        self.record.push(row);
         self.peak_kinetic = self.peak_kinetic.max(s.kinetic);
     }
 

@@ -842,3 +842,100 @@ fn snapshot_half_blocks_without_colour_keep_the_shading() {
     assert!(kinds >= 2, "{s}");
     insta::assert_snapshot!("half_blocks_100x30", s);
 }
+
+#[test]
+fn the_ui_starts_from_a_state_file_and_carries_on_from_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut source = app_with("pinned4", true);
+    for _ in 0..3 {
+        press(&mut source, KeyCode::Char('n'));
+    }
+    let path = dir.path().join("state.json");
+    let file = crate::state_file::StateFile::new(
+        &source.sim.scene.mesh,
+        &source.sim.state,
+        source.sim.frames,
+        source.sim.time,
+        source.sim.dt(),
+    );
+    std::fs::write(&path, serde_json::to_string(&file).unwrap()).unwrap();
+    let args = Args {
+        scene: "pinned4".to_owned(),
+        paused: true,
+        from: Some(path),
+        ..Args::default()
+    };
+    let mut app = build_in(
+        &args,
+        &crate::default_registry(),
+        false,
+        &cloth_render::ColorEnv::default(),
+    )
+    .unwrap();
+    assert_eq!(app.sim.state, source.sim.state, "positions and velocity");
+    assert_eq!((app.sim.frames, app.sim.time), (3, source.sim.time));
+    // One more frame from the file is the fourth frame of the run that wrote it.
+    press(&mut source, KeyCode::Char('n'));
+    press(&mut app, KeyCode::Char('n'));
+    assert_eq!(app.sim.state, source.sim.state);
+}
+
+#[test]
+fn the_stats_key_writes_a_row_for_every_frame_of_the_run_so_far() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    for _ in 0..4 {
+        press(&mut app, KeyCode::Char('n'));
+    }
+    press(&mut app, KeyCode::Char('e'));
+    let text = std::fs::read_to_string(dir.path().join("pinned4-stats.csv")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[0].starts_with("frame,time_s,"), "{text}");
+    assert_eq!(lines.len(), 1 + 5, "the start and frames 1 to 4:\n{text}");
+    assert!(lines[5].starts_with("4,"), "{text}");
+    // The UI does not time frames: the wall time column is empty.
+    assert!(lines[5].ends_with(",30,"), "{text}");
+    // A second export goes to a new file, and a reset starts the table again.
+    press(&mut app, KeyCode::Char('r'));
+    press(&mut app, KeyCode::Char('n'));
+    press(&mut app, KeyCode::Char('e'));
+    let again = std::fs::read_to_string(dir.path().join("pinned4-stats-2.csv")).unwrap();
+    assert_eq!(again.lines().count(), 1 + 2, "{again}");
+}
+
+#[test]
+fn the_record_key_records_the_screen_named_in_the_status_line_until_pressed_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    let _ = screen(&mut app, 100, 30);
+    press(&mut app, KeyCode::Char('R'));
+    let shown = screen(&mut app, 100, 30);
+    assert!(shown.contains("REC pinned4.cast"), "{shown}");
+    let buffer = {
+        let mut t = Terminal::new(TestBackend::new(100, 30)).unwrap();
+        t.draw(|f| view(&app, f)).unwrap();
+        t.backend().buffer().clone()
+    };
+    let start = std::time::Instant::now();
+    let rec = app.recording.as_mut().unwrap();
+    rec.frame(&buffer, start).unwrap();
+    rec.frame(&buffer, start + std::time::Duration::from_millis(500))
+        .unwrap();
+    press(&mut app, KeyCode::Char('R'));
+    assert!(app.recording.is_none());
+    let text = std::fs::read_to_string(dir.path().join("pinned4.cast")).unwrap();
+    let mut lines = text.lines();
+    let head: serde_json::Value = serde_json::from_str(lines.next().unwrap()).unwrap();
+    assert_eq!(head["version"], 2);
+    assert_eq!(
+        (head["width"].as_u64(), head["height"].as_u64()),
+        (Some(100), Some(30))
+    );
+    let events: Vec<(f64, String, String)> =
+        lines.map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(events.iter().map(|e| e.0).collect::<Vec<_>>(), [0.0, 0.5]);
+    assert!(events[0].2.contains("REC pinned4.cast"));
+    assert_eq!(events[0].2.matches("\r\n").count(), 29, "30 rows");
+}

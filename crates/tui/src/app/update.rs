@@ -143,16 +143,14 @@ pub fn update(app: &mut App, msg: Message) {
             }
         }
         Message::Save => {
-            let stem = std::path::Path::new(&app.sim.scene.origin)
-                .file_stem()
-                .and_then(|s| s.to_str())
-                .unwrap_or("scene")
-                .to_owned();
+            let stem = scene_stem(app);
             app.overlay = Overlay::Prompt(Prompt::prefilled(
                 Purpose::SavePath,
                 format!("{stem}-edited.json"),
             ));
         }
+        Message::WriteStats => write_stats(app),
+        Message::ToggleRecording => toggle_recording(app),
         Message::Input(c) => prompt_edit(app, |p| {
             if p.selected {
                 p.text.clear();
@@ -839,6 +837,62 @@ fn save(app: &mut App, path: &std::path::Path) -> anyhow::Result<()> {
         None => app.say(Level::Info, saved),
     }
     Ok(())
+}
+
+/// The scene's name as the start of a file name (`pinned4`, `my-scene`).
+fn scene_stem(app: &App) -> String {
+    std::path::Path::new(&app.sim.scene.origin)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("scene")
+        .to_owned()
+}
+
+/// Writes the run's table of numbers (every frame since the start or the last reset) to the
+/// first free `SCENE-stats.csv` of the folder.
+fn write_stats(app: &mut App) {
+    let path = super::recording::free_name(&app.cwd, &format!("{}-stats", scene_stem(app)), "csv");
+    match crate::export::StatsTable::write(&path, &app.sim.record) {
+        Ok(()) => {
+            let rows = app.sim.record.len();
+            app.say(
+                Level::Info,
+                format!("wrote {rows} frames of numbers to {}", path.display()),
+            );
+        }
+        Err(e) => app.say(Level::Error, format!("{e:#}")),
+    }
+}
+
+/// Starts recording the screen to the first free `SCENE.cast` of the folder, or stops the
+/// recording and keeps it.
+fn toggle_recording(app: &mut App) {
+    if let Some(result) = app.stop_recording() {
+        match result {
+            Ok(path) => app.say(
+                Level::Info,
+                format!(
+                    "recording saved to {} (play it with: asciinema play {})",
+                    path.display(),
+                    path.display()
+                ),
+            ),
+            Err(e) => app.say(Level::Error, format!("{e:#}")),
+        }
+        return;
+    }
+    let path = super::recording::free_name(&app.cwd, &scene_stem(app), "cast");
+    let (width, height) = app.screen;
+    match super::recording::Recording::start(&path, width, height, &app.sim.scene.origin) {
+        Ok(r) => {
+            app.recording = Some(r);
+            app.say(
+                Level::Info,
+                format!("recording the screen to {}; R stops", path.display()),
+            );
+        }
+        Err(e) => app.say(Level::Error, format!("{e:#}")),
+    }
 }
 
 /// Opens the scene picker on the scene that is open now.

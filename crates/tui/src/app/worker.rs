@@ -65,6 +65,9 @@ struct Published {
     steps: u64,
     frames: u64,
     history: std::collections::VecDeque<super::sim::Sample>,
+    /// Rows of the worker's record not yet adopted, which start at this index of it.
+    rows_from: usize,
+    new_rows: Vec<crate::export::StatsRow>,
     peak_kinetic: f64,
     fault: Option<super::sim::Fault>,
     /// Whether simulated time is advancing (a stop pauses it).
@@ -124,6 +127,7 @@ impl Worker {
                     shared: inner,
                     notify,
                     spare: Vec::new(),
+                    published: (0, 0),
                 }
                 .run();
             })?;
@@ -172,6 +176,8 @@ impl Worker {
         mirror.steps = p.steps;
         mirror.frames = p.frames;
         mirror.history.clone_from(&p.history);
+        mirror.record.truncate(p.rows_from);
+        mirror.record.append(&mut p.new_rows);
         mirror.peak_kinetic = p.peak_kinetic;
         mirror.fault.clone_from(&p.fault);
         let adopted = Adopted {
@@ -203,6 +209,8 @@ struct Stepper {
     notify: Box<dyn Fn() + Send>,
     /// The buffer the next snapshot's positions are copied into.
     spare: Vec<cloth_solver::Vec3>,
+    /// The record's generation and length at the last snapshot.
+    published: (u64, usize),
 }
 
 /// Rates over a window of wall time.
@@ -340,6 +348,18 @@ impl Stepper {
             p.steps = self.sim.steps;
             p.frames = self.sim.frames;
             p.history.clone_from(&self.sim.history);
+            // NOTE: only the rows since the last snapshot travel, so a long run's table is
+            // copied once, not at every draw; a reset starts the table again.
+            if self.sim.generation != self.published.0 {
+                self.published = (self.sim.generation, 0);
+                p.new_rows.clear();
+            }
+            if p.new_rows.is_empty() {
+                p.rows_from = self.published.1;
+            }
+            let from = self.published.1.min(self.sim.record.len());
+            p.new_rows.extend_from_slice(&self.sim.record[from..]);
+            self.published.1 = self.sim.record.len();
             p.peak_kinetic = self.sim.peak_kinetic;
             p.fault.clone_from(&self.sim.fault);
             p.running = self.running;
@@ -450,5 +470,37 @@ mod tests {
             mirror.scene.mesh.start_positions(),
             "a snapshot older than the reset is never shown"
         );
+    }
+
+    #[test]
+    fn the_mirror_gets_every_frame_s_row_once_and_a_reset_starts_the_table_again() {
+        let (tx, rx) = mpsc::channel();
+        let tx = Mutex::new(tx);
+        let w = Worker::spawn(
+            pinned4(),
+            false,
+            1.0,
+            Box::new(move || {
+                let _ = tx.lock().unwrap().send(());
+            }),
+        )
+        .unwrap();
+        let mut mirror = pinned4();
+        for _ in 0..3 {
+            w.send(Command::StepFrame);
+        }
+        while mirror.frames < 3 {
+            next(&w, &rx, &mut mirror);
+        }
+        let frames: Vec<u64> = mirror.record.iter().map(|r| r.frame).collect();
+        assert_eq!(frames, [0, 1, 2, 3], "each frame once, in order");
+        w.send(Command::Reset);
+        mirror.reset();
+        w.send(Command::StepFrame);
+        while mirror.frames < 1 {
+            next(&w, &rx, &mut mirror);
+        }
+        let frames: Vec<u64> = mirror.record.iter().map(|r| r.frame).collect();
+        assert_eq!(frames, [0, 1]);
     }
 }

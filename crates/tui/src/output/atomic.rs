@@ -342,6 +342,161 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<Written> {
     Ok(Written::Replaced)
 }
 
+/// A result file written piece by piece (a frame at a time), then put in place whole.
+///
+/// The same temporary file as [`write_atomic`]'s, `.NAME.clothsim-tmp.PID` next to the
+/// result, receives the bytes; [`StreamFile::finish`] gives it the old file's mode and owner,
+/// syncs it and renames it over the result. Dropped unfinished (an error, a panic) or ended by
+/// a signal (once [`cleanup_on_signals`] was called), it is removed and the old file stays as
+/// it was. A result with several names (hard links) gets the finished bytes copied in place,
+/// so every name sees them. It can seek, so a header can be completed at the end.
+pub struct StreamFile {
+    path: PathBuf,
+    target: PathBuf,
+    existing: Option<fs::Metadata>,
+    tmp: TempFile,
+    out: std::io::BufWriter<File>,
+}
+
+impl std::fmt::Debug for StreamFile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("StreamFile")
+            .field("path", &self.path)
+            .field("tmp", &self.tmp.path)
+            .finish_non_exhaustive()
+    }
+}
+
+impl StreamFile {
+    /// Starts writing `path` (see the type's doc).
+    ///
+    /// # Errors
+    /// Naming `path` and the cause, once: a folder given as the file, a missing or
+    /// read-only folder, a FIFO or device (a stream that is put in place at the end must be a
+    /// regular file).
+    pub fn create(path: &Path) -> anyhow::Result<Self> {
+        check_target(path)?;
+        let target = resolve(path)?;
+        let existing = match fs::metadata(&target) {
+            Ok(m) => Some(m),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+            Err(e) => {
+                return Err(
+                    anyhow::Error::new(e).context(format!("{}: cannot write", path.display()))
+                );
+            }
+        };
+        if existing.as_ref().is_some_and(|m| !m.is_file()) {
+            bail!(
+                "{}: not a regular file; this output is written to a file, then put in place",
+                path.display()
+            );
+        }
+        let dir = parent_of(&target);
+        let Some(name) = target.file_name().map(|n| n.to_string_lossy().into_owned()) else {
+            bail!("{}: not a file name", path.display());
+        };
+        remove_leftovers(dir);
+        let mode = if existing.is_some() { 0o600 } else { 0o666 };
+        let mut tmp = TempFile::create(dir, &name, mode).map_err(|e| {
+            anyhow::Error::new(e).context(format!(
+                "{}: cannot create a file in {}",
+                path.display(),
+                dir.display()
+            ))
+        })?;
+        let Some(file) = tmp.file.take() else {
+            bail!("{}: the temporary file is gone", path.display());
+        };
+        Ok(Self {
+            path: path.to_owned(),
+            target,
+            existing,
+            tmp,
+            out: std::io::BufWriter::with_capacity(256 * 1024, file),
+        })
+    }
+
+    /// The result's path, as given.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Puts the written bytes in place as the result (see the type's doc).
+    ///
+    /// # Errors
+    /// Naming the result and the cause: a full disk, a rename refused.
+    pub fn finish(self) -> anyhow::Result<Written> {
+        let Self {
+            path,
+            target,
+            existing,
+            mut tmp,
+            out,
+        } = self;
+        let file = out
+            .into_inner()
+            .map_err(|e| anyhow::Error::new(e.into_error()))
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+        #[cfg(unix)]
+        if let Some(old) = &existing {
+            use std::os::unix::fs::MetadataExt;
+            if old.nlink() > 1 || !keep_owner(&file, old) {
+                drop(file);
+                let bytes = fs::read(&tmp.path)
+                    .with_context(|| format!("{}: cannot read back", path.display()))?;
+                drop(tmp);
+                write_in_place(&path, &target, &bytes)?;
+                return Ok(Written::InPlace(format!(
+                    "{} has other names (hard links) or an owner a new file cannot be given, so \
+                     it was written in place, not atomically",
+                    path.display()
+                )));
+            }
+        }
+        let synced = match &existing {
+            Some(old) => file.set_permissions(old.permissions()),
+            None => Ok(()),
+        }
+        .and_then(|()| file.sync_all());
+        if let Err(e) = synced {
+            return Err(anyhow::Error::new(e).context(format!("{}: cannot write", path.display())));
+        }
+        drop(file);
+        fs::rename(&tmp.path, &target).with_context(|| {
+            format!(
+                "{}: cannot move the new contents into place",
+                path.display()
+            )
+        })?;
+        tmp.renamed = true;
+        if let Ok(d) = File::open(parent_of(&target)) {
+            let _ = d.sync_all();
+        }
+        Ok(Written::Replaced)
+    }
+}
+
+impl Write for StreamFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.out.write(buf)
+    }
+
+    fn write_all(&mut self, buf: &[u8]) -> std::io::Result<()> {
+        self.out.write_all(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.out.flush()
+    }
+}
+
+impl std::io::Seek for StreamFile {
+    fn seek(&mut self, pos: std::io::SeekFrom) -> std::io::Result<u64> {
+        self.out.seek(pos)
+    }
+}
+
 /// Gives the temporary file the old file's owner and group when they differ from ours; false
 /// when the system does not allow it (only the superuser may give a file away).
 #[cfg(unix)]
@@ -586,5 +741,46 @@ mod tests {
         assert_eq!(leftover_pid("state.json.clothsim-tmp.123"), None);
         assert_eq!(leftover_pid(".state.json.clothsim-tmp."), None);
         assert_eq!(leftover_pid(".state.json"), None);
+    }
+
+    #[test]
+    fn a_streamed_file_appears_whole_on_finish_and_not_at_all_when_dropped() {
+        use std::io::{Seek, SeekFrom};
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("anim.pc2");
+        fs::write(&path, b"old").unwrap();
+        let mut s = StreamFile::create(&path).unwrap();
+        s.write_all(b"0000 body").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"old", "untouched while writing");
+        s.seek(SeekFrom::Start(0)).unwrap();
+        s.write_all(b"head").unwrap();
+        assert_eq!(s.finish().unwrap(), Written::Replaced);
+        assert_eq!(fs::read(&path).unwrap(), b"head body");
+        assert_eq!(names(dir.path()), ["anim.pc2"]);
+
+        let mut s = StreamFile::create(&path).unwrap();
+        s.write_all(b"partial").unwrap();
+        drop(s);
+        assert_eq!(fs::read(&path).unwrap(), b"head body");
+        assert_eq!(
+            names(dir.path()),
+            ["anim.pc2"],
+            "the temporary file is gone"
+        );
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_streamed_file_keeps_the_mode_of_the_file_it_replaces() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("stats.csv");
+        fs::write(&path, b"old").unwrap();
+        fs::set_permissions(&path, fs::Permissions::from_mode(0o640)).unwrap();
+        let mut s = StreamFile::create(&path).unwrap();
+        s.write_all(b"new").unwrap();
+        s.finish().unwrap();
+        let got = fs::metadata(&path).unwrap().permissions().mode() & 0o7777;
+        assert_eq!(got, 0o640);
     }
 }

@@ -44,6 +44,13 @@ pub fn title(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
             Span::styled(format!(" t {:.3} s ", sim.time), theme.text),
         ),
     ];
+    if let Some(r) = &app.recording {
+        let name = r
+            .path()
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        fields.push((10, Span::styled(format!(" REC {name} "), theme.error)));
+    }
     // NOTE: rates are shown only for a running cloth once measured, so pausing does not
     // leave the last second's figures standing as if current.
     let r = &s.rates;
