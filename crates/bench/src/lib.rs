@@ -143,9 +143,29 @@ pub fn time_interleaved(
     params: &StepParams,
     run: BenchRun,
 ) -> Result<Vec<InterleavedResult>, (usize, SolveError)> {
+    let each = vec![*params; runs.len()];
+    time_interleaved_each(runs, mesh, colliders, &each, run)
+}
+
+/// [`time_interleaved`] with parameters of its own for each run (`params[i]` for `runs[i]`):
+/// solvers compared at the steps per frame each is meant for. Runs without parameters of
+/// their own take the last ones given (or the defaults when none are).
+///
+/// # Errors
+/// The index of the run and the first [`SolveError`] of any of its frames.
+///
+pub fn time_interleaved_each(
+    runs: &mut [(&mut dyn Solver, &mut ClothState)],
+    mesh: &ClothMesh,
+    colliders: &[Collider],
+    params: &[StepParams],
+    run: BenchRun,
+) -> Result<Vec<InterleavedResult>, (usize, SolveError)> {
+    let fallback = StepParams::default();
+    let at = |i: usize| params.get(i).or(params.last()).unwrap_or(&fallback);
     for (i, (solver, state)) in runs.iter_mut().enumerate() {
         for _ in 0..run.warmup_frames {
-            advance_frame(&mut **solver, mesh, colliders, params, state).map_err(|e| (i, e))?;
+            advance_frame(&mut **solver, mesh, colliders, at(i), state).map_err(|e| (i, e))?;
         }
     }
     let frames = run.frames as usize;
@@ -153,18 +173,19 @@ pub fn time_interleaved(
     for _ in 0..frames {
         for (i, (solver, state)) in runs.iter_mut().enumerate() {
             let start = Instant::now();
-            advance_frame(&mut **solver, mesh, colliders, params, state).map_err(|e| (i, e))?;
+            advance_frame(&mut **solver, mesh, colliders, at(i), state).map_err(|e| (i, e))?;
             frame_seconds[i].push(start.elapsed().as_secs_f64());
         }
     }
     let first = frame_seconds.first().cloned().unwrap_or_default();
     Ok(frame_seconds
         .iter_mut()
-        .map(|seconds| {
+        .enumerate()
+        .map(|(i, seconds)| {
             let mut ratios: Vec<f64> = seconds.iter().zip(&first).map(|(t, t0)| t / t0).collect();
             let total = seconds.iter().sum();
             InterleavedResult {
-                result: result(mesh, params, total, seconds),
+                result: result(mesh, at(i), total, seconds),
                 time_ratio_to_first: median(&mut ratios).unwrap_or(1.0),
             }
         })
@@ -277,6 +298,41 @@ mod tests {
         }
         // Each round's ratio of the first run to itself is exactly 1.
         assert_eq!(timed[0].time_ratio_to_first, 1.0);
+    }
+
+    #[test]
+    fn each_interleaved_run_takes_its_own_steps_per_frame() {
+        // A run at 3 steps per frame advances exactly as one timed alone at 3 steps, beside a
+        // run at 30; the results report each run's own steps.
+        let mesh = pinned_grid(8).unwrap();
+        let thirty = StepParams::default();
+        let three = StepParams {
+            steps_per_frame: 3,
+            ..thirty
+        };
+        let run = BenchRun {
+            warmup_frames: 1,
+            frames: 2,
+        };
+        let mut alone = ClothState::new(&mesh);
+        time_frames(
+            &mut cloth_solver::Verlet::new(),
+            &mesh,
+            &[],
+            &three,
+            &mut alone,
+            run,
+        )
+        .unwrap();
+        let (mut a, mut b) = (ClothState::new(&mesh), ClothState::new(&mesh));
+        let (mut va, mut vb) = (cloth_solver::Verlet::new(), cloth_solver::Verlet::new());
+        let mut runs: Vec<(&mut dyn Solver, &mut ClothState)> =
+            vec![(&mut va, &mut a), (&mut vb, &mut b)];
+        let timed = time_interleaved_each(&mut runs, &mesh, &[], &[thirty, three], run).unwrap();
+        assert_eq!(b.positions, alone.positions);
+        assert_ne!(a.positions, alone.positions, "30 steps are not 3");
+        assert_eq!(timed[0].result.steps_per_frame, 30);
+        assert_eq!(timed[1].result.steps_per_frame, 3);
     }
 
     #[test]

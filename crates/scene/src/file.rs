@@ -134,6 +134,16 @@ pub struct SimulationBlock {
     /// sets it; solvers without one ignore it. An integer from 1 to 1000.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub iterations: Option<u64>,
+    /// Worker threads: another spelling of the `threads` solver option (Verlet's), for any
+    /// solver that has one. Giving it and `solver_options.threads` with different values is an
+    /// error; with the same value, either may go.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub threads: Option<u64>,
+    /// The constraint order (`faithful`, `parallel` or `colored` for Verlet): another spelling of
+    /// the `order` solver option, for any solver that has one. Giving it and
+    /// `solver_options.order` with different values is an error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub constraint_order: Option<String>,
     /// Seed of the vertical cloth's z-jitter (default 184).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,

@@ -33,15 +33,30 @@ pub struct Scene {
     /// `simulation.iterations`, the older spelling of the `iterations` solver option (see
     /// [`Scene::options_for`]).
     pub iterations: Option<u32>,
+    /// `simulation.threads`, the scene key of the `threads` solver option (see
+    /// [`Scene::options_for`]).
+    pub threads: Option<u64>,
+    /// `simulation.constraint_order`, the scene key of the `order` solver option (see
+    /// [`Scene::options_for`]).
+    pub constraint_order: Option<String>,
 }
+
+/// The scene keys that spell a solver option: `(scene key, option)`. Each fills in its option,
+/// for a solver that has it, when `simulation.solver_options` leaves it out.
+pub const OPTION_KEYS: [(&str, &str); 3] = [
+    ("simulation.iterations", "iterations"),
+    ("simulation.threads", "threads"),
+    ("simulation.constraint_order", "order"),
+];
 
 impl Scene {
     /// The options a run of the solver `name` gets from this scene, as a JSON object.
     ///
     /// `simulation.solver_options` belongs to the scene's own solver (the default one when the
     /// scene names none, whose name the caller passes as `default`), so another solver gets
-    /// none of them. The alias `simulation.iterations` fills in an `iterations` option that
-    /// `solver_options` leaves out, for a solver that `has_option("iterations")`.
+    /// none of them. The scene keys of [`OPTION_KEYS`] (`simulation.iterations`,
+    /// `simulation.threads`, `simulation.constraint_order`) fill in their option when
+    /// `solver_options` leaves it out, for any solver that `has_option` it.
     #[must_use]
     pub fn options_for(
         &self,
@@ -55,13 +70,54 @@ impl Scene {
         } else {
             Map::new()
         };
-        if let Some(n) = self.iterations
-            && has_option("iterations")
-            && !options.contains_key("iterations")
-        {
-            options.insert("iterations".to_owned(), Value::from(n));
+        for (_, key) in OPTION_KEYS {
+            if let Some(v) = self.option_key(key)
+                && has_option(key)
+                && !options.contains_key(key)
+            {
+                options.insert(key.to_owned(), v);
+            }
         }
         Value::Object(options)
+    }
+
+    /// The value the scene key of the solver option `option` gives (see [`OPTION_KEYS`]).
+    #[must_use]
+    pub fn option_key(&self, option: &str) -> Option<Value> {
+        match option {
+            "iterations" => self.iterations.map(Value::from),
+            "threads" => self.threads.map(Value::from),
+            "order" => self.constraint_order.clone().map(Value::from),
+            _ => None,
+        }
+    }
+
+    /// Whether the scene (its file or a `--set`) gives `simulation.simulation_steps`; when it
+    /// does not, a run takes its solver's recommended steps per frame.
+    #[must_use]
+    pub fn gives_steps(&self) -> bool {
+        self.file
+            .simulation
+            .as_ref()
+            .is_some_and(|s| s.simulation_steps.is_some())
+    }
+
+    /// Sets the solver option `option` (`threads`, `order`) for every solver that has it, as a
+    /// command-line flag does: the scene key of [`OPTION_KEYS`] takes `value`, and the scene's
+    /// own `solver_options` entry for it goes.
+    pub fn override_option(&mut self, option: &str, value: &Value) {
+        match option {
+            "iterations" => self.iterations = value.as_u64().map(|v| v as u32),
+            "threads" => self.threads = value.as_u64(),
+            "order" => self.constraint_order = value.as_str().map(str::to_owned),
+            _ => return,
+        }
+        self.solver_options.remove(option);
+        if let Some(sim) = self.file.simulation.as_mut()
+            && let Some(options) = sim.solver_options.as_mut()
+        {
+            options.remove(option);
+        }
     }
 
     /// The scene's file with `params`, `colliders`' friction, the solver `solver` and its
@@ -107,10 +163,16 @@ impl Scene {
         .then_some(params.stretch_limit);
         sim.solver = Some(solver.to_owned());
         let options = options.as_object().cloned().unwrap_or_default();
-        // NOTE: the options now say the iteration count; the alias would only shadow an
-        // `iterations` option of another solver chosen later, so it goes.
+        // NOTE: the options now say these; a scene key would only shadow (or contradict) the
+        // option of another solver chosen later, so it goes.
         if options.contains_key("iterations") {
             sim.iterations = None;
+        }
+        if options.contains_key("threads") {
+            sim.threads = None;
+        }
+        if options.contains_key("order") {
+            sim.constraint_order = None;
         }
         sim.solver_options = (!options.is_empty()).then_some(options);
         f.simulation = Some(sim);
@@ -382,6 +444,8 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         solver,
         solver_options,
         iterations,
+        threads,
+        constraint_order,
         seed,
     } = sim;
     let defaults = StepParams::default();
@@ -410,6 +474,33 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         Some(s) => return Err(ck.fail("simulation.iterations", s, "an integer from 1 to 1000")),
         None => None,
     };
+    let solver_options = solver_options.unwrap_or_default();
+    if let Some(t) = threads
+        && t == 0
+    {
+        return Err(ck.fail("simulation.threads", t, "an integer >= 1"));
+    }
+    for (key, option, value) in [
+        ("simulation.threads", "threads", threads.map(Value::from)),
+        (
+            "simulation.constraint_order",
+            "order",
+            constraint_order.clone().map(Value::from),
+        ),
+    ] {
+        if let (Some(v), Some(given)) = (&value, solver_options.get(option))
+            && !same_value(v, given)
+        {
+            return Err(ck.fail(
+                key,
+                v,
+                &format!(
+                    "the value of simulation.solver_options.{option} ({given}), which it is \
+                     another spelling of; give one of the two"
+                ),
+            ));
+        }
+    }
     let gravity = match gravity {
         Some(g) => ck.vec3("simulation.gravity", g)?,
         None => defaults.gravity,
@@ -474,9 +565,19 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         params,
         colliders,
         solver,
-        solver_options: solver_options.unwrap_or_default(),
+        solver_options,
         iterations,
+        threads,
+        constraint_order,
     })
+}
+
+/// Whether two JSON values say the same option value (`2` and `2.0` do).
+fn same_value(a: &Value, b: &Value) -> bool {
+    match (a.as_f64(), b.as_f64()) {
+        (Some(x), Some(y)) => x == y,
+        _ => a == b,
+    }
 }
 
 fn mesh_error(origin: &str, e: &MeshError) -> SceneError {

@@ -49,8 +49,13 @@ pub struct Args {
     #[arg(default_value = "pinned4", value_hint = clap::ValueHint::FilePath)]
     pub scene: String,
     /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).
+    /// Without `simulation.simulation_steps` in the scene or a `--set`, steps per frame follow
+    /// the solver's recommendation, also when another solver is chosen in the UI.
     #[arg(long)]
     pub solver: Option<String>,
+    /// `--threads` and `--order`.
+    #[command(flatten)]
+    pub solver_flags: crate::solvers::Flags,
     /// Override a scene value: a dotted key and a JSON value, e.g. `cloth.ks=100000`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
@@ -85,6 +90,7 @@ impl Default for Args {
         Self {
             scene: "pinned4".to_owned(),
             solver: None,
+            solver_flags: crate::solvers::Flags::default(),
             sets: Vec::new(),
             paused: false,
             fps: 30,
@@ -107,7 +113,14 @@ pub fn build_in(
     is_tty: bool,
     env: &ColorEnv,
 ) -> anyhow::Result<App> {
-    let scene = cloth_scene::load(&args.scene, &args.sets)?;
+    let mut scene = cloth_scene::load(&args.scene, &args.sets)?;
+    // The flags become the scene's option keys, so they reach every solver chosen in the UI.
+    crate::solvers::prepare(
+        registry,
+        &mut scene,
+        args.solver.as_deref(),
+        &args.solver_flags,
+    )?;
     let mut sim = Simulation::new(scene, registry.clone(), args.solver.as_deref())?;
     if let Some(path) = &args.from {
         let (file, state) = crate::state_file::StateFile::read(path, &sim.scene.mesh, sim.dt())?;

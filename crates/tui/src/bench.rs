@@ -10,9 +10,10 @@
 //! Each configuration is the course's `pinned4` cloth scaled to `--grid N` points per side at the
 //! standard spacing ([`cloth_bench::pinned_grid`]), warmed up for one simulated second, then
 //! timed by [`cloth_bench::time_frames`], or with `--interleave` frame by frame in turn with
-//! the grid's other configurations by [`cloth_bench::time_interleaved`]. Any registered solver
-//! can be timed by name; `--threads` and `--order` set the options of those names of the
-//! solvers that have them (Verlet's). Criterion benches (`cargo bench -p cloth-solver`) are the
+//! the grid's other configurations by [`cloth_bench::time_interleaved_each`]. Any registered
+//! solver can be timed by name, each at its recommended steps per frame unless `--steps` sets
+//! them all; `--threads` and `--order` set the options of those names of the solvers that have
+//! them (Verlet's). Criterion benches (`cargo bench -p cloth-solver`) are the
 //! measurement of record; this command lets a user reproduce the README's table.
 
 use std::fmt::Write as _;
@@ -20,7 +21,7 @@ use std::fmt::Write as _;
 use crate::steal::CpuTimes;
 use anyhow::Context as _;
 use clap::ValueEnum;
-use cloth_bench::{BenchResult, BenchRun, pinned_grid, time_frames, time_interleaved};
+use cloth_bench::{BenchResult, BenchRun, pinned_grid, time_frames, time_interleaved_each};
 use cloth_mesh::{ClothMesh, ClothState};
 use cloth_solver::{Registry, Solver, SolverEntry, StepParams, max_stretch_ratio};
 use serde_json::{Map, Value};
@@ -48,6 +49,10 @@ pub struct Args {
     /// shared point; the fastest on big cloths). Default: the solver's own.
     #[arg(long = "order")]
     orders: Vec<String>,
+    /// Steps per frame of every configuration (default: each solver's recommendation, as
+    /// `clothsim solvers` lists them).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    steps: Option<u32>,
     /// Frames timed per configuration (after one simulated second of warm-up).
     #[arg(long, default_value_t = 90, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     frames: u32,
@@ -71,18 +76,20 @@ enum Switch {
     Off,
 }
 
-/// One configuration to time: a solver and its options.
+/// One configuration to time: a solver, its options and its steps per frame.
 #[derive(Debug, Clone)]
 struct Config {
     entry: SolverEntry,
     /// The options it is built with (a JSON object).
     options: Value,
+    /// The step parameters it runs with.
+    params: StepParams,
 }
 
 impl Config {
     /// Every configuration the options name, in the order given: solvers, then threads, then
     /// orders (for the solvers that have those options).
-    fn all(args: &Args, registry: &Registry) -> anyhow::Result<Vec<Self>> {
+    fn all(args: &Args, registry: &Registry, base: &StepParams) -> anyhow::Result<Vec<Self>> {
         let entries: Vec<SolverEntry> = if args.solvers.is_empty() {
             registry.default_entry().copied().into_iter().collect()
         } else {
@@ -119,7 +126,15 @@ impl Config {
                     }
                     let options = Value::Object(options);
                     entry.check(&options)?;
-                    out.push(Config { entry, options });
+                    let params = StepParams {
+                        steps_per_frame: args.steps.unwrap_or(entry.steps_per_frame()),
+                        ..*base
+                    };
+                    out.push(Config {
+                        entry,
+                        options,
+                        params,
+                    });
                 }
             }
         }
@@ -176,12 +191,7 @@ struct Row {
 }
 
 /// Times every configuration of the `n x n` cloth, one after the other or in turn.
-fn time_grid(
-    args: &Args,
-    configs: &[Config],
-    params: &StepParams,
-    n: usize,
-) -> anyhow::Result<Vec<Row>> {
+fn time_grid(args: &Args, configs: &[Config], n: usize) -> anyhow::Result<Vec<Row>> {
     // Checked here, so the message gives the number as typed rather than an overflowed square.
     let max = cloth_mesh::MAX_POINTS;
     if n < 2 || n.checked_mul(n).is_none_or(|points| points > max) {
@@ -202,6 +212,7 @@ fn time_grid(
             let mut solver = config.build(&mesh).with_context(|| config.describe(n))?;
             let mut state = ClothState::new(&mesh);
             let before = CpuTimes::now();
+            let params = &config.params;
             let result = time_frames(solver.as_mut(), &mesh, &[], params, &mut state, run)
                 .with_context(|| config.describe(n))?;
             held_together(solver.as_mut(), &mesh, params, &mut state, config, run)
@@ -228,11 +239,12 @@ fn time_grid(
         .zip(states.iter_mut())
         .collect();
     let before = CpuTimes::now();
-    let timed = time_interleaved(&mut runs, &mesh, &[], params, run)
+    let params: Vec<StepParams> = configs.iter().map(|c| c.params).collect();
+    let timed = time_interleaved_each(&mut runs, &mesh, &[], &params, run)
         .map_err(|(i, e)| anyhow::Error::new(e).context(configs[i].describe(n)))?;
     let steal = steal_since(before);
     for ((solver, state), config) in solvers.iter_mut().zip(states.iter_mut()).zip(configs) {
-        held_together(solver.as_mut(), &mesh, params, state, config, run)
+        held_together(solver.as_mut(), &mesh, &config.params, state, config, run)
             .with_context(|| config.describe(n))?;
     }
     Ok(configs
@@ -299,10 +311,10 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         self_collision: args.self_collision == Switch::On,
         ..StepParams::default()
     };
-    let configs = Config::all(args, registry)?;
+    let configs = Config::all(args, registry, &params)?;
     let mut rows = Vec::new();
     for &n in &args.grids {
-        rows.extend(time_grid(args, &configs, &params, n)?);
+        rows.extend(time_grid(args, &configs, n)?);
     }
     let mut out = String::new();
     if args.json {
@@ -322,6 +334,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
                         "solver": config.entry.name(),
                         "options": config.options,
                         "threads": config.threads(),
+                        "steps_per_frame": r.steps_per_frame,
                         "self_collision": params.self_collision,
                         "order": config.order(),
                         "points": r.points,
@@ -356,7 +369,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         if args.interleave {
             let _ = write!(out, " {:>9}", "vs first");
         }
-        let _ = write!(out, " {:>8} {:>6}", "stretch", "steal");
+        let _ = write!(out, " {:>8} {:>6} {:>5}", "stretch", "steal", "steps");
         out.push('\n');
         for Row {
             n,
@@ -391,6 +404,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
                     let _ = write!(out, " {:>6}", "-");
                 }
             }
+            let _ = write!(out, " {:>5}", r.steps_per_frame);
             out.push('\n');
         }
     }

@@ -131,18 +131,16 @@ pub fn command(registry: &Registry) -> clap::Command {
         .into_iter()
         .map(PossibleValue::new)
         .collect();
-    with_solver_values(Cli::command(), &values)
-        .mut_subcommand("bench", |bench| {
-            // `--order` takes the `order` option's values of the registered solvers.
-            bench.mut_arg("orders", |a| {
-                a.value_parser(PossibleValuesParser::new(orders))
-                    .ignore_case(true)
-            })
-        })
-        .after_help(format!(
-            "Solvers: {names} (their options: `clothsim solvers`).\n\n{EXAMPLES}"
-        ))
-        .long_version(long_version(registry))
+    // `--order` takes the `order` option's values of the registered solvers.
+    with_values(
+        with_values(Cli::command(), "solver", &values),
+        "order",
+        &orders,
+    )
+    .after_help(format!(
+        "Solvers: {names} (their options: `clothsim solvers`).\n\n{EXAMPLES}"
+    ))
+    .long_version(long_version(registry))
 }
 
 /// Parses `args` (the program name first) against [`command`].
@@ -154,11 +152,12 @@ pub fn parse(registry: &Registry, args: Vec<OsString>) -> Result<Cli, clap::Erro
     Cli::from_arg_matches(&matches)
 }
 
-/// `cmd` and its subcommands with the registered names as the values of every `--solver`.
-fn with_solver_values(cmd: clap::Command, values: &[PossibleValue]) -> clap::Command {
+/// `cmd` and its subcommands with `values` (the registered names, or their options' values) as
+/// the values of every `--long`.
+fn with_values(cmd: clap::Command, long: &str, values: &[PossibleValue]) -> clap::Command {
     let ids: Vec<clap::Id> = cmd
         .get_arguments()
-        .filter(|a| a.get_long() == Some("solver"))
+        .filter(|a| a.get_long() == Some(long))
         .map(|a| a.get_id().clone())
         .collect();
     let mut cmd = cmd;
@@ -168,7 +167,7 @@ fn with_solver_values(cmd: clap::Command, values: &[PossibleValue]) -> clap::Com
                 .ignore_case(true)
         });
     }
-    cmd.mut_subcommands(|sub| with_solver_values(sub, values))
+    cmd.mut_subcommands(|sub| with_values(sub, long, values))
 }
 
 /// Writes `bytes` to stdout through the one output path: a reader that went away (`| head`)

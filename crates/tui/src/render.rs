@@ -108,8 +108,12 @@ pub struct Args {
     #[arg(long = "set", value_name = "KEY=VALUE")]
     sets: Vec<String>,
     /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).
+    /// Without `simulation.simulation_steps` in the scene or a `--set`, the run takes the
+    /// solver's recommended steps per frame.
     #[arg(long)]
     solver: Option<String>,
+    #[command(flatten)]
+    flags: solvers::Flags,
     /// Progress on stderr: auto (a bar when stderr is a terminal and the frames go elsewhere),
     /// always (also a line every 10 s when stderr is not a terminal), never. `--progress` alone
     /// means always.
@@ -157,8 +161,8 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             }
         }
     };
-    let scene = cloth_scene::load(&args.scene, &args.sets)?;
-    let choice = solvers::choose(registry, &scene, args.solver.as_deref())?;
+    let mut scene = cloth_scene::load(&args.scene, &args.sets)?;
+    let choice = solvers::prepare(registry, &mut scene, args.solver.as_deref(), &args.flags)?;
     let start = match &args.from {
         Some(path) => StateFile::read(path, &scene.mesh, scene.params.dt())?.1,
         None => ClothState::new(&scene.mesh),

@@ -26,8 +26,12 @@ pub struct Args {
     #[arg(long = "set", value_name = "KEY=VALUE")]
     sets: Vec<String>,
     /// The solver (overrides the scene's `simulation.solver`; `clothsim solvers` lists them).
+    /// Without `simulation.simulation_steps` in the scene or a `--set`, the run takes the
+    /// solver's recommended steps per frame.
     #[arg(long)]
     solver: Option<String>,
+    #[command(flatten)]
+    flags: solvers::Flags,
     /// Where to write the run: the final state as a `.json` file (positions and last
     /// positions) or an `.obj` file (mesh with texture coordinates and normals); or the
     /// animation as a `.pc2` (Blender's Point Cache 2) or `.mdd` point cache (with the first
@@ -107,9 +111,9 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     if args.out.is_some() || args.stats.is_some() {
         output::cleanup_on_signals()?;
     }
-    let scene = cloth_scene::load(&args.scene, &args.sets)?;
+    let mut scene = cloth_scene::load(&args.scene, &args.sets)?;
     headless::note_shadowing(&args.scene);
-    let choice = solvers::choose(registry, &scene, args.solver.as_deref())?;
+    let choice = solvers::prepare(registry, &mut scene, args.solver.as_deref(), &args.flags)?;
     let mut solver = choice.build(&scene.mesh)?;
     let explicit = choice.entry.is_explicit();
     let params = scene.params;

@@ -80,14 +80,110 @@ pub fn choose(registry: &Registry, scene: &Scene, name: Option<&str>) -> anyhow:
 
 /// A refused option of a scene, named by the scene's key that gave it.
 fn scene_option_error(scene: &Scene, e: &OptionError) -> anyhow::Error {
-    let key = match e.key() {
-        Some("iterations") if !scene.solver_options.contains_key("iterations") => {
-            "simulation.iterations".to_owned()
-        }
-        Some(key) => format!("simulation.solver_options.{key}"),
-        None => "simulation.solver_options".to_owned(),
+    let alias = cloth_scene::OPTION_KEYS
+        .iter()
+        .find(|(_, option)| e.key() == Some(option) && !scene.solver_options.contains_key(*option));
+    let key = match (alias, e.key()) {
+        (Some((scene_key, _)), _) => (*scene_key).to_owned(),
+        (None, Some(key)) => format!("simulation.solver_options.{key}"),
+        (None, None) => "simulation.solver_options".to_owned(),
     };
     anyhow::anyhow!("{}: {key}: {e}", scene.origin)
+}
+
+/// The steps per frame a run of `entry` on `scene` takes: the scene's
+/// `simulation.simulation_steps` when the file or a `--set` gives it, else the solver's
+/// recommendation ([`SolverEntry::steps_per_frame`]).
+#[must_use]
+pub fn steps_for(scene: &Scene, entry: &SolverEntry) -> u32 {
+    if scene.gives_steps() {
+        scene.params.steps_per_frame
+    } else {
+        entry.steps_per_frame()
+    }
+}
+
+/// The solver flags of `tui`, `simulate` and `render`: the `threads` and `order` options of
+/// the solvers that have them, over the scene's `simulation.threads`,
+/// `simulation.constraint_order` and `solver_options`.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct Flags {
+    /// Worker threads of the solvers that have a `threads` option (Verlet's force sweep and
+    /// self-collision; the results do not depend on it). Overrides the scene's
+    /// `simulation.threads`.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=256))]
+    pub threads: Option<u16>,
+    /// Constraint order of the solvers that have an `order` option: Verlet's are faithful (the
+    /// course's, the default), parallel (row bands) and colored (spring classes with no shared
+    /// point: holds a big cloth together, and the fastest there). Overrides the scene's
+    /// `simulation.constraint_order`.
+    #[arg(long, value_name = "ORDER")]
+    pub order: Option<String>,
+}
+
+impl Flags {
+    /// The flags given, as `(flag, option, value)`.
+    fn given(&self) -> Vec<(&'static str, &'static str, Value)> {
+        let mut out = Vec::new();
+        if let Some(t) = self.threads {
+            out.push(("--threads", "threads", Value::from(t)));
+        }
+        if let Some(o) = &self.order {
+            out.push(("--order", "order", Value::from(o.to_ascii_lowercase())));
+        }
+        out
+    }
+}
+
+/// Readies `scene` for a run with the flags `flags` and the solver `name` (see [`choose`]): the
+/// flags become the scene's option keys, the solver is chosen, and the steps per frame become
+/// [`steps_for`] the chosen solver.
+///
+/// # Errors
+/// What [`choose`] refuses, and a flag the chosen solver has no option for, naming the flag,
+/// the solver and the solvers that take it.
+pub fn prepare(
+    registry: &Registry,
+    scene: &mut Scene,
+    name: Option<&str>,
+    flags: &Flags,
+) -> anyhow::Result<Choice> {
+    let given = flags.given();
+    for (_, option, value) in &given {
+        scene.override_option(option, value);
+    }
+    // The flags' values were checked by the command line's parser against the registered
+    // solvers' ranges and choices; the chosen solver checks them again as options.
+    let choice = choose(registry, scene, name)?;
+    for (flag, option, value) in &given {
+        if choice.entry.option(option).is_none() {
+            let with: Vec<&str> = registry
+                .entries()
+                .iter()
+                .filter(|e| e.option(option).is_some())
+                .map(SolverEntry::name)
+                .collect();
+            anyhow::bail!(
+                "{flag} {}: the {} solver has no {option} option (solvers with one: {})",
+                show(value),
+                choice.entry.name(),
+                if with.is_empty() {
+                    "none".to_owned()
+                } else {
+                    with.join(", ")
+                }
+            );
+        }
+    }
+    scene.params.steps_per_frame = steps_for(scene, &choice.entry);
+    Ok(choice)
+}
+
+/// A flag's value as typed: text without quotes.
+fn show(value: &Value) -> String {
+    value
+        .as_str()
+        .map_or_else(|| value.to_string(), str::to_owned)
 }
 
 /// The text of `clothsim solvers`: each solver's name, description and steps per frame, then

@@ -450,8 +450,13 @@ fn bench_interleaves_every_configuration_and_reports_ratios_to_the_first() {
         let steal = steal.as_f64().unwrap();
         assert!((0.0..=100.0).contains(&steal), "{steal}");
     }
-    // The table ends with the ratio column, then the stretch, then the steal share; without
-    // `--interleave` the JSON has no ratio.
+    // Each solver runs at its recommended steps per frame, as `clothsim solvers` lists them.
+    for row in rows {
+        let expected = if row["solver"] == "verlet" { 30 } else { 1 };
+        assert_eq!(row["steps_per_frame"], expected, "{row}");
+    }
+    // The table ends with the ratio column, then the stretch, the steal share and the steps;
+    // without `--interleave` the JSON has no ratio.
     let table = clothsim(&["bench", "--grid", "8", "--frames", "2", "--interleave"]);
     assert!(table.status.success(), "{}", stderr(&table));
     let text = String::from_utf8(table.stdout).unwrap();
@@ -459,16 +464,25 @@ fn bench_interleaves_every_configuration_and_reports_ratios_to_the_first() {
         text.lines()
             .next()
             .unwrap()
-            .ends_with("vs first  stretch  steal")
+            .ends_with("vs first  stretch  steal steps")
     );
     let first = text.lines().nth(1).unwrap();
     assert!(first.contains(" 1.000x "), "{first}");
+    assert!(first.ends_with(" 30"), "{first}");
     if cfg!(target_os = "linux") {
-        assert!(first.ends_with('%'), "{first}");
+        let steal = first.trim_end_matches(|c: char| c.is_ascii_digit() || c == ' ');
+        assert!(steal.ends_with('%'), "{first}");
     }
     let plain = clothsim(&["bench", "--grid", "8", "--frames", "2", "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&plain.stdout).unwrap();
     assert!(v[0]["time_ratio_to_first"].is_null());
+    // `--steps` sets every configuration's steps per frame.
+    let o = clothsim(&[
+        "bench", "--grid", "6", "--frames", "1", "--steps", "7", "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v[0]["steps_per_frame"], 7);
 }
 
 #[test]
@@ -709,4 +723,127 @@ fn the_stretch_limit_off_experiment_runs_to_the_end_headless() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["frames"], 270);
     assert!(v.get("diverged").is_none());
+}
+
+/// `simulate ARGS` as JSON, checked to have succeeded.
+fn simulated(args: &[&str]) -> serde_json::Value {
+    let o = clothsim(&[&["simulate"][..], args].concat());
+    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+#[test]
+fn threads_and_order_are_flags_and_scene_keys_of_the_same_options() {
+    let base = simulated(&["pinned4", "--frames", "20"]);
+    // The thread count does not change the results (the solver promises it); the flag and the
+    // scene key reach the solver alike.
+    for args in [
+        &["pinned4", "--frames", "20", "--threads", "2"][..],
+        &["pinned4", "--frames", "20", "--set", "simulation.threads=2"],
+    ] {
+        assert_eq!(simulated(args)["positions"], base["positions"], "{args:?}");
+    }
+    // The colored order sweeps the springs in another order, so once the falling cloth
+    // stretches past the limit (within 20 frames) some point sits elsewhere by round-off at
+    // least; flag and scene key give the same bits.
+    let colored = simulated(&["pinned4", "--frames", "20", "--order", "colored"]);
+    assert_ne!(colored["positions"], base["positions"]);
+    let keyed = simulated(&[
+        "pinned4",
+        "--frames",
+        "20",
+        "--set",
+        "simulation.constraint_order=\"colored\"",
+    ]);
+    assert_eq!(keyed["positions"], colored["positions"]);
+    // A flag overrides the scene's option, even where the scene's two spellings agree.
+    let flagged = simulated(&[
+        "pinned4",
+        "--frames",
+        "20",
+        "--set",
+        "simulation.solver_options={\"order\": \"faithful\"}",
+        "--order",
+        "COLORED",
+    ]);
+    assert_eq!(flagged["positions"], colored["positions"]);
+    let rendered = clothsim(&[
+        "render",
+        "pinned4",
+        "--frames",
+        "1",
+        "--size",
+        "20x10",
+        "--threads",
+        "2",
+        "--order",
+        "parallel",
+    ]);
+    assert!(rendered.status.success(), "{}", stderr(&rendered));
+}
+
+#[test]
+fn solver_flags_are_refused_clearly() {
+    let o = clothsim(&["simulate", "pinned4", "--order", "random"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("[possible values: faithful, parallel, colored]"),
+        "{}",
+        stderr(&o)
+    );
+    let o = clothsim(&["simulate", "pinned4", "--threads", "0"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let o = clothsim(&[
+        "simulate",
+        "pinned4",
+        "--set",
+        "simulation.threads=3",
+        "--set",
+        "simulation.solver_options={\"threads\": 2}",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("pinned4: simulation.threads is 3, but it must be the value of simulation.solver_options.threads (2)"),
+        "{}",
+        stderr(&o)
+    );
+    if cfg!(feature = "implicit") {
+        let o = clothsim(&[
+            "simulate",
+            "pinned4",
+            "--solver",
+            "fast-implicit",
+            "--threads",
+            "2",
+        ]);
+        assert_eq!(o.status.code(), Some(1));
+        assert!(
+            stderr(&o).contains(
+                "--threads 2: the fast-implicit solver has no threads option (solvers with one: verlet)"
+            ),
+            "{}",
+            stderr(&o)
+        );
+    }
+}
+
+#[cfg(feature = "implicit")]
+#[test]
+fn a_chosen_solver_runs_at_its_steps_unless_the_scene_gives_them() {
+    // The state file records the step: one frame of 1/90 s in the solver's steps.
+    let dt = |v: &serde_json::Value| v["dt"].as_f64().unwrap();
+    let one = simulated(&["pinned4", "--frames", "1", "--solver", "fast-implicit"]);
+    assert_eq!(dt(&one), 1.0 / 90.0 / 1.0);
+    let verlet = simulated(&["pinned4", "--frames", "1"]);
+    assert_eq!(dt(&verlet), 1.0 / 90.0 / 30.0);
+    let given = simulated(&[
+        "pinned4",
+        "--frames",
+        "1",
+        "--solver",
+        "fast-implicit",
+        "--set",
+        "simulation.simulation_steps=30",
+    ]);
+    assert_eq!(dt(&given), 1.0 / 90.0 / 30.0);
 }

@@ -371,3 +371,110 @@ fn a_saved_scene_keeps_its_solver_and_options() {
     let file = s.to_file(&s.params, &s.colliders, "verlet", &serde_json::json!({}));
     assert!(file.simulation.unwrap().solver_options.is_none());
 }
+
+#[test]
+fn threads_and_constraint_order_are_scene_keys_of_the_solver_options() {
+    let s = load(
+        "pinned4",
+        &[
+            "simulation.threads=2".to_owned(),
+            "simulation.constraint_order=\"colored\"".to_owned(),
+        ],
+    )
+    .unwrap();
+    let verlet = |k: &str| k == "threads" || k == "order";
+    assert_eq!(
+        s.options_for("verlet", "verlet", verlet),
+        serde_json::json!({"threads": 2, "order": "colored"})
+    );
+    // They reach any solver with those options, not only the scene's own (as the options
+    // object does), and no solver without them.
+    assert_eq!(
+        s.options_for("other", "verlet", verlet),
+        serde_json::json!({"threads": 2, "order": "colored"})
+    );
+    assert_eq!(
+        s.options_for("fast-implicit", "verlet", |k| k == "iterations"),
+        serde_json::json!({})
+    );
+    let e = err(&["simulation.threads=0"]);
+    assert!(
+        e.contains("simulation.threads is 0, but it must be an integer >= 1"),
+        "{e}"
+    );
+    let e = err(&["simulation.constraint_order=3"]);
+    assert!(
+        e.contains("simulation.constraint_order: invalid type"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_scene_key_and_its_option_may_agree_but_not_disagree() {
+    let agree = load(
+        "pinned4",
+        &[
+            "simulation.threads=2".to_owned(),
+            "simulation.solver_options={\"threads\": 2.0, \"order\": \"parallel\"}".to_owned(),
+            "simulation.constraint_order=\"parallel\"".to_owned(),
+        ],
+    );
+    assert!(agree.is_ok(), "{:?}", agree.err());
+    let e = err(&[
+        "simulation.threads=4",
+        "simulation.solver_options={\"threads\": 2}",
+    ]);
+    assert_eq!(
+        e,
+        "pinned4: simulation.threads is 4, but it must be the value of \
+         simulation.solver_options.threads (2), which it is another spelling of; give one of the two"
+    );
+    let e = err(&[
+        "simulation.constraint_order=\"colored\"",
+        "simulation.solver_options={\"order\": \"faithful\"}",
+    ]);
+    assert!(
+        e.starts_with(
+            "pinned4: simulation.constraint_order is \"colored\", but it must be the value of \
+             simulation.solver_options.order (\"faithful\")"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn an_override_replaces_both_spellings_and_a_saved_scene_keeps_one() {
+    let mut s = load(
+        "pinned4",
+        &[
+            "simulation.threads=2".to_owned(),
+            "simulation.solver_options={\"order\": \"parallel\"}".to_owned(),
+        ],
+    )
+    .unwrap();
+    s.override_option("order", &Value::from("colored"));
+    s.override_option("threads", &Value::from(3));
+    let all = |_: &str| true;
+    assert_eq!(
+        s.options_for("verlet", "verlet", all),
+        serde_json::json!({"threads": 3, "order": "colored"})
+    );
+    // Saved with the options a run used, the scene keys give way to them, so the file
+    // reloads without a disagreement.
+    let options = serde_json::json!({"threads": 1, "order": "faithful"});
+    let file = s.to_file(&s.params, &s.colliders, "verlet", &options);
+    let text = serde_json::to_string(&file).unwrap();
+    let back = parse(&text, "saved.json", &[]).unwrap();
+    assert_eq!((back.threads, back.constraint_order), (None, None));
+    assert_eq!(Value::Object(back.solver_options), options);
+}
+
+#[test]
+fn the_steps_are_given_by_the_file_or_a_set_only() {
+    assert!(!load("pinned4", &[]).unwrap().gives_steps());
+    assert!(
+        load("pinned4", &["simulation.simulation_steps=5".to_owned()])
+            .unwrap()
+            .gives_steps()
+    );
+}

@@ -197,19 +197,15 @@ impl Springs<'_> {
                 lanes.sort_unstable();
                 lanes == a
             });
-            // SAFETY: this function runs only where the CPU supports AVX2; the group's points
-            // are this task's (`View`).
-            unsafe {
-                limit_group_avx2(
-                    layout,
-                    a[0],
-                    self.offset,
-                    rest,
-                    self.pinned,
-                    points,
-                    self.ratio,
-                );
-            }
+            limit_group_avx2(
+                layout,
+                a[0],
+                self.offset,
+                rest,
+                self.pinned,
+                points,
+                self.ratio,
+            );
         });
     }
 
@@ -314,12 +310,11 @@ impl Layout {
 /// are consecutive points: 6 loads, 6 stores and about two dozen shuffles in place of 24 scalar
 /// loads with inserts and 24 scalar stores.
 ///
-/// # Safety
-/// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
-#[inline(always)]
-unsafe fn limit_group_avx2(
+#[inline]
+#[target_feature(enable = "avx2")]
+fn limit_group_avx2(
     layout: Layout,
     a0: usize,
     offset: isize,
@@ -328,45 +323,44 @@ unsafe fn limit_group_avx2(
     points: &View<'_>,
     ratio: f64,
 ) {
-    use lanes::{Lanes, join, load, pins, split, store};
-    use std::arch::x86_64::_mm256_loadu_pd;
+    use lanes::{Lanes, join, load, load4, pins, split, store};
     let b0 = a0.wrapping_add_signed(offset);
-    // SAFETY (the block): AVX2 is there (the caller's contract); the slices are bounds-checked,
-    // and `View::run` checks the runs of points, which are this task's alone.
-    unsafe {
-        if layout == Layout::Rows {
-            let (pa, pb) = (points.run(a0, LANES), points.run(b0, LANES));
-            let (a, b) = (load(pa), load(pb));
-            let rest = _mm256_loadu_pd(rest[a0..a0 + LANES].as_ptr());
-            let (pin_a, pin_b) = (pins(&pinned[a0..a0 + LANES]), pins(&pinned[b0..b0 + LANES]));
-            if let Some((a, b)) = correct(Lanes { a, b }, rest, pin_a, pin_b, ratio) {
+    if layout == Layout::Rows {
+        let (pa, pb) = (points.run(a0, LANES), points.run(b0, LANES));
+        // SAFETY: `View::run` checked both runs of four points, this task's alone.
+        let (a, b) = unsafe { (load(pa), load(pb)) };
+        let rest = load4(&rest[a0..a0 + LANES]);
+        let (pin_a, pin_b) = (pins(&pinned[a0..a0 + LANES]), pins(&pinned[b0..b0 + LANES]));
+        if let Some((a, b)) = correct(Lanes { a, b }, rest, pin_a, pin_b, ratio) {
+            // SAFETY: as for the loads.
+            unsafe {
                 store(pa, a);
                 store(pb, b);
             }
-            return;
         }
-        // The partners come first in the run of 8 points.
-        let run = points.run(b0, 2 * LANES);
-        let (lo, hi) = (load(run), load(run.add(LANES)));
-        let rest = &rest[b0..b0 + 2 * LANES];
-        let pinned = &pinned[b0..b0 + 2 * LANES];
-        let pairs = layout == Layout::Pairs;
-        let whole = |lo, hi| split(pairs, lo, hi);
-        let (_, rest) = whole(
-            _mm256_loadu_pd(rest.as_ptr()),
-            _mm256_loadu_pd(rest[LANES..].as_ptr()),
-        );
-        let (pin_b, pin_a) = whole(pins(&pinned[..LANES]), pins(&pinned[LANES..]));
-        let mut b = lo;
-        let mut a = hi;
+        return;
+    }
+    // The partners come first in the run of 8 points.
+    let run = points.run(b0, 2 * LANES);
+    // SAFETY: `View::run` checked the run of eight points, this task's alone.
+    let (lo, hi) = unsafe { (load(run), load(run.add(LANES))) };
+    let rest = &rest[b0..b0 + 2 * LANES];
+    let pinned = &pinned[b0..b0 + 2 * LANES];
+    let pairs = layout == Layout::Pairs;
+    let (_, rest) = split(pairs, load4(&rest[..LANES]), load4(&rest[LANES..]));
+    let (pin_b, pin_a) = split(pairs, pins(&pinned[..LANES]), pins(&pinned[LANES..]));
+    let mut b = lo;
+    let mut a = hi;
+    for c in 0..3 {
+        (b[c], a[c]) = split(pairs, lo[c], hi[c]);
+    }
+    if let Some((a, b)) = correct(Lanes { a, b }, rest, pin_a, pin_b, ratio) {
+        let (mut lo, mut hi) = (b, a);
         for c in 0..3 {
-            (b[c], a[c]) = whole(lo[c], hi[c]);
+            (lo[c], hi[c]) = join(pairs, b[c], a[c]);
         }
-        if let Some((a, b)) = correct(Lanes { a, b }, rest, pin_a, pin_b, ratio) {
-            let (mut lo, mut hi) = (b, a);
-            for c in 0..3 {
-                (lo[c], hi[c]) = join(pairs, b[c], a[c]);
-            }
+        // SAFETY: as for the loads.
+        unsafe {
             store(run, lo);
             store(run.add(LANES), hi);
         }
@@ -376,12 +370,10 @@ unsafe fn limit_group_avx2(
 /// `limit_one` on the lanes' springs, from `a` to `b`: the new ends, or none when every spring
 /// is inside the limit.
 ///
-/// # Safety
-/// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
-#[inline(always)]
-unsafe fn correct(
+#[inline]
+#[target_feature(enable = "avx2")]
+fn correct(
     ends: lanes::Lanes,
     rest: std::arch::x86_64::__m256d,
     pin_a: std::arch::x86_64::__m256d,
@@ -394,47 +386,44 @@ unsafe fn correct(
         _mm256_set1_pd, _mm256_sqrt_pd, _mm256_sub_pd,
     };
     let lanes::Lanes { a, b } = ends;
-    // SAFETY (the block): AVX2 is there (the caller's contract).
-    unsafe {
-        // NOTE: arrays written out, not `array::map`: its closure is not inlined here, and the
-        // intrinsics in it became calls.
-        let d = [
-            _mm256_sub_pd(b[0], a[0]),
-            _mm256_sub_pd(b[1], a[1]),
-            _mm256_sub_pd(b[2], a[2]),
-        ];
-        let len2 = _mm256_add_pd(
-            _mm256_add_pd(_mm256_mul_pd(d[0], d[0]), _mm256_mul_pd(d[1], d[1])),
-            _mm256_mul_pd(d[2], d[2]),
-        );
-        let max = _mm256_mul_pd(_mm256_set1_pd(ratio), rest);
-        // `inside_bound(max)`: `max * max * (1 - 4 eps)`, in that order.
-        let bound = _mm256_mul_pd(
-            _mm256_mul_pd(max, max),
-            _mm256_set1_pd(1.0 - 4.0 * f64::EPSILON),
-        );
-        // `!(len2 <= bound)`: unordered compares true, so a NaN goes on, as in `limit_one`.
-        let outside = _mm256_cmp_pd(len2, bound, _CMP_NLE_UQ);
-        if _mm256_movemask_pd(outside) == 0 {
-            return None;
-        }
-        let len = _mm256_sqrt_pd(len2);
-        let over = _mm256_and_pd(outside, _mm256_cmp_pd(len, max, _CMP_NLE_UQ));
-        let factor = _mm256_div_pd(_mm256_sub_pd(len, max), len);
-        // `limit_one`'s cases: a free end moves half the excess when the other is free too,
-        // all of it when the other is pinned; a pinned end stays (`andnot`: over and free).
-        let both_free = _mm256_andnot_pd(_mm256_or_pd(pin_a, pin_b), over);
-        let (move_a, move_b) = (_mm256_andnot_pd(pin_a, over), _mm256_andnot_pd(pin_b, over));
-        let half = _mm256_set1_pd(0.5);
-        let (mut to_a, mut to_b) = (a, b);
-        for c in 0..3 {
-            let excess = _mm256_mul_pd(d[c], factor);
-            let step = _mm256_blendv_pd(excess, _mm256_mul_pd(excess, half), both_free);
-            to_a[c] = _mm256_blendv_pd(a[c], _mm256_add_pd(a[c], step), move_a);
-            to_b[c] = _mm256_blendv_pd(b[c], _mm256_sub_pd(b[c], step), move_b);
-        }
-        Some((to_a, to_b))
+    // NOTE: arrays written out, not `array::map`: its closure is not inlined here, and the
+    // intrinsics in it became calls.
+    let d = [
+        _mm256_sub_pd(b[0], a[0]),
+        _mm256_sub_pd(b[1], a[1]),
+        _mm256_sub_pd(b[2], a[2]),
+    ];
+    let len2 = _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(d[0], d[0]), _mm256_mul_pd(d[1], d[1])),
+        _mm256_mul_pd(d[2], d[2]),
+    );
+    let max = _mm256_mul_pd(_mm256_set1_pd(ratio), rest);
+    // `inside_bound(max)`: `max * max * (1 - 4 eps)`, in that order.
+    let bound = _mm256_mul_pd(
+        _mm256_mul_pd(max, max),
+        _mm256_set1_pd(1.0 - 4.0 * f64::EPSILON),
+    );
+    // `!(len2 <= bound)`: unordered compares true, so a NaN goes on, as in `limit_one`.
+    let outside = _mm256_cmp_pd(len2, bound, _CMP_NLE_UQ);
+    if _mm256_movemask_pd(outside) == 0 {
+        return None;
     }
+    let len = _mm256_sqrt_pd(len2);
+    let over = _mm256_and_pd(outside, _mm256_cmp_pd(len, max, _CMP_NLE_UQ));
+    let factor = _mm256_div_pd(_mm256_sub_pd(len, max), len);
+    // `limit_one`'s cases: a free end moves half the excess when the other is free too,
+    // all of it when the other is pinned; a pinned end stays (`andnot`: over and free).
+    let both_free = _mm256_andnot_pd(_mm256_or_pd(pin_a, pin_b), over);
+    let (move_a, move_b) = (_mm256_andnot_pd(pin_a, over), _mm256_andnot_pd(pin_b, over));
+    let half = _mm256_set1_pd(0.5);
+    let (mut to_a, mut to_b) = (a, b);
+    for c in 0..3 {
+        let excess = _mm256_mul_pd(d[c], factor);
+        let step = _mm256_blendv_pd(excess, _mm256_mul_pd(excess, half), both_free);
+        to_a[c] = _mm256_blendv_pd(a[c], _mm256_add_pd(a[c], step), move_a);
+        to_b[c] = _mm256_blendv_pd(b[c], _mm256_sub_pd(b[c], step), move_b);
+    }
+    Some((to_a, to_b))
 }
 
 /// Four points' coordinates as x, y and z lanes, and the shuffles between them and memory.
@@ -462,94 +451,93 @@ mod lanes {
     /// The four points from `p`, as lanes.
     ///
     /// # Safety
-    /// AVX2; `p` points at four points that may be read.
-    #[inline(always)]
+    /// `p` points at four points that may be read.
+    #[inline]
+    #[target_feature(enable = "avx2")]
     pub(super) unsafe fn load(p: *const Vec3) -> Xyz {
         const { assert!(size_of::<Vec3>() == 3 * size_of::<f64>()) };
         let f = p.cast::<f64>();
+        // m0 = x0 y0 z0 x1, m1 = y1 z1 x2 y2, m2 = z2 x3 y3 z3.
         // SAFETY: a `Vec3` is three contiguous f64s (nalgebra's `repr(C)` matrix over a
-        // `repr(transparent)` array; size checked above), so four are 12; AVX2 (the contract).
-        unsafe {
-            // m0 = x0 y0 z0 x1, m1 = y1 z1 x2 y2, m2 = z2 x3 y3 z3.
-            let (m0, m1, m2) = (
+        // `repr(transparent)` array; size checked above), so four points are 12 readable f64s
+        // (the contract).
+        let (m0, m1, m2) = unsafe {
+            (
                 _mm256_loadu_pd(f),
                 _mm256_loadu_pd(f.add(4)),
                 _mm256_loadu_pd(f.add(8)),
-            );
-            let xy = _mm256_blend_pd(m0, m1, 0b1100); // x0 y0 x2 y2
-            let zx = _mm256_permute2f128_pd(m0, m2, 0x21); // z0 x1 z2 x3
-            let yz = _mm256_blend_pd(m1, m2, 0b1100); // y1 z1 y3 z3
-            [
-                _mm256_blend_pd(xy, zx, 0b1010),
-                _mm256_shuffle_pd(xy, yz, 0b0101),
-                _mm256_blend_pd(zx, yz, 0b1010),
-            ]
-        }
+            )
+        };
+        let xy = _mm256_blend_pd(m0, m1, 0b1100); // x0 y0 x2 y2
+        let zx = _mm256_permute2f128_pd(m0, m2, 0x21); // z0 x1 z2 x3
+        let yz = _mm256_blend_pd(m1, m2, 0b1100); // y1 z1 y3 z3
+        [
+            _mm256_blend_pd(xy, zx, 0b1010),
+            _mm256_shuffle_pd(xy, yz, 0b0101),
+            _mm256_blend_pd(zx, yz, 0b1010),
+        ]
     }
 
     /// Writes lanes back as the four points from `p` ([`load`]'s inverse).
     ///
     /// # Safety
-    /// AVX2; `p` points at four points that may be written.
-    #[inline(always)]
+    /// `p` points at four points that may be written.
+    #[inline]
+    #[target_feature(enable = "avx2")]
     pub(super) unsafe fn store(p: *mut Vec3, [x, y, z]: Xyz) {
         let f = p.cast::<f64>();
-        // SAFETY: as in `load`.
+        let xy = _mm256_shuffle_pd(x, y, 0b0000); // x0 y0 x2 y2
+        let yz = _mm256_shuffle_pd(y, z, 0b1111); // y1 z1 y3 z3
+        let zx = _mm256_blend_pd(z, x, 0b1010); // z0 x1 z2 x3
+        // SAFETY: as in `load`: four points are 12 writable f64s (the contract).
         unsafe {
-            let xy = _mm256_shuffle_pd(x, y, 0b0000); // x0 y0 x2 y2
-            let yz = _mm256_shuffle_pd(y, z, 0b1111); // y1 z1 y3 z3
-            let zx = _mm256_blend_pd(z, x, 0b1010); // z0 x1 z2 x3
             _mm256_storeu_pd(f, _mm256_permute2f128_pd(xy, zx, 0x20));
             _mm256_storeu_pd(f.add(4), _mm256_blend_pd(yz, xy, 0b1100));
             _mm256_storeu_pd(f.add(8), _mm256_permute2f128_pd(zx, yz, 0x31));
         }
     }
 
+    /// Four values as lanes.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub(super) fn load4(values: &[f64]) -> __m256d {
+        let values: &[f64; 4] = values.try_into().expect("four values");
+        // SAFETY: four f64s are readable from `values`.
+        unsafe { _mm256_loadu_pd(values.as_ptr()) }
+    }
+
     /// Four pin flags as lane masks (all ones where pinned).
-    ///
-    /// # Safety
-    /// AVX2.
-    #[inline(always)]
-    pub(super) unsafe fn pins(pinned: &[bool]) -> __m256d {
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub(super) fn pins(pinned: &[bool]) -> __m256d {
         let bytes: [bool; 4] = pinned.try_into().expect("four pin flags");
         // A `bool` is the byte 0 or 1.
         let word = i32::from_le_bytes(bytes.map(u8::from));
-        // SAFETY: AVX2 (the contract).
-        unsafe {
-            let ones = _mm256_cvtepu8_epi64(_mm_cvtsi32_si128(word));
-            _mm256_castsi256_pd(_mm256_sub_epi64(_mm256_setzero_si256(), ones))
-        }
+        let ones = _mm256_cvtepu8_epi64(_mm_cvtsi32_si128(word));
+        _mm256_castsi256_pd(_mm256_sub_epi64(_mm256_setzero_si256(), ones))
     }
 
     /// The lanes of 8 points (`lo`: places 0-3, `hi`: 4-7) as those at places 0, 2, 4, 6 and 1,
     /// 3, 5, 7 (`pairs`; in the lane order 0 4 2 6 and 1 5 3 7), or else 0, 1, 4, 5 and 2, 3,
     /// 6, 7.
-    ///
-    /// # Safety
-    /// AVX2.
-    #[inline(always)]
-    pub(super) unsafe fn split(pairs: bool, lo: __m256d, hi: __m256d) -> (__m256d, __m256d) {
-        // SAFETY: AVX2 (the contract).
-        unsafe {
-            if pairs {
-                (_mm256_unpacklo_pd(lo, hi), _mm256_unpackhi_pd(lo, hi))
-            } else {
-                (
-                    _mm256_permute2f128_pd(lo, hi, 0x20),
-                    _mm256_permute2f128_pd(lo, hi, 0x31),
-                )
-            }
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub(super) fn split(pairs: bool, lo: __m256d, hi: __m256d) -> (__m256d, __m256d) {
+        if pairs {
+            (_mm256_unpacklo_pd(lo, hi), _mm256_unpackhi_pd(lo, hi))
+        } else {
+            (
+                _mm256_permute2f128_pd(lo, hi, 0x20),
+                _mm256_permute2f128_pd(lo, hi, 0x31),
+            )
         }
     }
 
-    /// [`split`]'s inverse.
-    ///
-    /// # Safety
-    /// AVX2.
-    #[inline(always)]
-    pub(super) unsafe fn join(pairs: bool, first: __m256d, second: __m256d) -> (__m256d, __m256d) {
-        // SAFETY: AVX2 (the contract); the unpacks and the half swaps are their own inverses.
-        unsafe { split(pairs, first, second) }
+    /// [`split`]'s inverse: the unpacks and the half swaps are their own inverses.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub(super) fn join(pairs: bool, first: __m256d, second: __m256d) -> (__m256d, __m256d) {
+        split(pairs, first, second)
     }
 }
 

@@ -18,8 +18,8 @@ pub struct Settings {
     pub params: StepParams,
     /// Live collision objects.
     pub colliders: Vec<Collider>,
-    /// The active solver's numeric options, in its entry's order (see
-    /// [`super::sim::numeric_options`]).
+    /// The active solver's options as numbers (a choice as its index), in its entry's order
+    /// (see [`super::sim::numeric_options`]).
     pub options: Vec<f64>,
 }
 
@@ -55,6 +55,11 @@ pub enum Kind {
     },
     /// On or off; nudging or Enter flips it.
     Toggle,
+    /// One of a few names, held as its index; nudging or Enter moves to the next.
+    Choice {
+        /// The names, in order.
+        choices: &'static [&'static str],
+    },
     /// The solver: nudging cycles the registry's solvers. Handled by the update function
     /// because switching builds a new solver; `get`/`set` are unused.
     Solver,
@@ -329,20 +334,21 @@ macro_rules! option_slots {
 }
 option_slots!(0 1 2 3 4 5 6 7);
 
-/// The rows of the active solver's numeric options (at most eight; a solver with more shows
-/// its first eight).
+/// The rows of the active solver's options (at most eight; a solver with more shows its first
+/// eight): numbers, and choices cycled through their names.
 fn option_rows(entry: &SolverEntry) -> impl Iterator<Item = Param> + '_ {
     entry
         .options()
         .iter()
-        .filter(|o| o.numeric().is_some())
         .zip(OPTION_GET.iter().zip(OPTION_SET))
         .map(|(o, (&get, &set))| {
             let (min, max, _) = o.numeric().unwrap_or((0.0, 0.0, 0.0));
             let integer = matches!(o.kind, OptionKind::Integer { .. });
             // Ranges over three decades step by ratios, like ks; others by a hundredth of the
             // range (whole numbers by one).
-            let kind = if min > 0.0 && max / min >= 1000.0 {
+            let kind = if let OptionKind::Choice { choices, .. } = o.kind {
+                Kind::Choice { choices }
+            } else if min > 0.0 && max / min >= 1000.0 {
                 Kind::Number {
                     min,
                     max,
@@ -384,7 +390,7 @@ fn option_rows(entry: &SolverEntry) -> impl Iterator<Item = Param> + '_ {
         })
 }
 
-/// How many rows the panel has for `sim`: [`PARAMS`] and the active solver's numeric options.
+/// How many rows the panel has for `sim`: [`PARAMS`] and the active solver's options.
 pub fn row_count(sim: &Simulation) -> usize {
     PARAMS.len() + option_rows(sim.entry()).count()
 }
@@ -448,6 +454,10 @@ impl Param {
                     1.0
                 }
             }
+            Kind::Choice { choices } => {
+                let n = choices.len().max(1) as i64;
+                ((value.round() as i64 + i64::from(presses)).rem_euclid(n)) as f64
+            }
             Kind::Solver => value,
         }
     }
@@ -499,6 +509,13 @@ impl Param {
                 "off" | "false" | "no" | "0" => Ok(0.0),
                 _ => Err(format!("{}: {t:?} is not on or off", self.label)),
             },
+            Kind::Choice { choices } => choices
+                .iter()
+                .position(|c| c.eq_ignore_ascii_case(t))
+                .map(|i| i as f64)
+                .ok_or_else(|| {
+                    format!("{}: {t:?} is not one of {}", self.label, choices.join(", "))
+                }),
             Kind::Solver => Err(format!("{}: choose with left/right", self.label)),
         }
     }
@@ -508,6 +525,9 @@ impl Param {
         match (self.kind, value) {
             (_, None) | (Kind::Solver, _) => "-".to_owned(),
             (Kind::Toggle, Some(v)) => if v == 0.0 { "off" } else { "on" }.to_owned(),
+            (Kind::Choice { choices }, Some(v)) => choices
+                .get(v.round().max(0.0) as usize)
+                .map_or_else(|| "-".to_owned(), |&c| c.to_owned()),
             (Kind::Number { decimals, .. }, Some(v)) => {
                 // Large values, and small ones that the fixed decimals would show as zero,
                 // in scientific notation.
@@ -592,6 +612,29 @@ mod tests {
         let s = settings();
         assert_eq!((row("sphere friction").get)(&s), None);
         assert_eq!(row("sphere friction").format(None), "-");
+    }
+
+    #[test]
+    fn a_choice_row_cycles_through_its_names_and_reads_them_typed() {
+        let order = Param {
+            label: "order",
+            unit: "",
+            help: "",
+            kind: Kind::Choice {
+                choices: &["faithful", "parallel", "colored"],
+            },
+            get: |s| s.options.first().copied(),
+            set: |s, v| s.options[0] = v,
+        };
+        assert_eq!(order.nudged(0.0, 1, false), 1.0);
+        assert_eq!(order.nudged(2.0, 1, false), 0.0, "past the last, the first");
+        assert_eq!(order.nudged(0.0, -1, true), 2.0);
+        assert_eq!(order.format(Some(2.0)), "colored");
+        assert_eq!(order.parse(" Colored "), Ok(2.0));
+        assert_eq!(
+            order.parse("random").unwrap_err(),
+            "order: \"random\" is not one of faithful, parallel, colored"
+        );
     }
 
     #[test]

@@ -513,16 +513,10 @@ fn the_solver_row_cycles_through_the_registry_and_shows_the_new_solvers_options(
     for expected in names.iter().cycle().skip(1).take(names.len()) {
         press(&mut app, KeyCode::Right);
         assert_eq!(app.sim.entry().name(), *expected);
-        // One row per numeric option of the active solver, after the fixed rows.
-        let numeric = app
-            .sim
-            .entry()
-            .options()
-            .iter()
-            .filter(|o| o.numeric().is_some())
-            .count();
-        assert_eq!(super::params::row_count(&app.sim), PARAMS.len() + numeric);
-        assert_eq!(app.sim.settings.options.len(), numeric);
+        // One row per option of the active solver, after the fixed rows.
+        let options = app.sim.entry().options().len();
+        assert_eq!(super::params::row_count(&app.sim), PARAMS.len() + options);
+        assert_eq!(app.sim.settings.options.len(), options);
     }
 }
 
@@ -938,4 +932,175 @@ fn the_record_key_records_the_screen_named_in_the_status_line_until_pressed_agai
     assert_eq!(events.iter().map(|e| e.0).collect::<Vec<_>>(), [0.0, 0.5]);
     assert!(events[0].2.contains("REC pinned4.cast"));
     assert_eq!(events[0].2.matches("\r\n").count(), 29, "30 rows");
+}
+
+#[test]
+fn verlets_threads_and_order_rows_show_and_rebuild_the_solver() {
+    let mut app = app_with("pinned4", true);
+    let threads = PARAMS.len();
+    let order = threads + 1;
+    assert_eq!(super::params::row(&app.sim, threads).label, "threads");
+    assert_eq!(super::params::row(&app.sim, order).label, "order");
+    let shown = screen(&mut app, 140, 44);
+    assert!(
+        shown.contains("order") && shown.contains("faithful"),
+        "{shown}"
+    );
+    while app.selected != order {
+        press(&mut app, KeyCode::Down);
+    }
+    // Right moves to the next order, parallel, then colored; the solver is rebuilt with it.
+    press(&mut app, KeyCode::Right);
+    press(&mut app, KeyCode::Right);
+    assert_eq!(app.sim.options()["order"], "colored");
+    assert!(screen(&mut app, 140, 44).contains("colored"));
+    assert!(app.sim.step_frame().is_ok());
+    // Enter moves on as well (a choice has no value to type), wrapping to the first.
+    press(&mut app, KeyCode::Enter);
+    assert_eq!(app.sim.options()["order"], "faithful");
+    while app.selected != threads {
+        press(&mut app, KeyCode::Up);
+    }
+    press(&mut app, KeyCode::Right);
+    assert_eq!(app.sim.options()["threads"], 2);
+    assert!(app.sim.step_frame().is_ok());
+}
+
+#[test]
+fn the_order_flag_and_scene_key_reach_the_ui_and_its_row() {
+    for (flags, sets) in [
+        (
+            crate::solvers::Flags {
+                threads: Some(2),
+                order: Some("colored".to_owned()),
+            },
+            Vec::new(),
+        ),
+        (
+            crate::solvers::Flags::default(),
+            vec![
+                "simulation.threads=2".to_owned(),
+                "simulation.constraint_order=\"colored\"".to_owned(),
+            ],
+        ),
+    ] {
+        let args = Args {
+            scene: "pinned4".to_owned(),
+            solver_flags: flags,
+            sets,
+            paused: true,
+            ..Args::default()
+        };
+        let mut app = build_in(
+            &args,
+            &crate::default_registry(),
+            false,
+            &cloth_render::ColorEnv::default(),
+        )
+        .unwrap();
+        assert_eq!(
+            app.sim.options(),
+            &serde_json::json!({"threads": 2, "order": "colored"})
+        );
+        assert_eq!(app.sim.settings.options, vec![2.0, 2.0]);
+        assert!(screen(&mut app, 140, 44).contains("colored"));
+    }
+}
+
+#[test]
+fn a_cloth_coming_apart_under_the_faithful_order_gets_a_hint_to_try_colored() {
+    let mut app = app_with("pinned4", true);
+    let second = 90;
+    let apart = |stretch| super::sim::Sample {
+        time: 0.0,
+        kinetic: 0.0,
+        stretch,
+    };
+    // A second minus one frame above 1.5 is not yet "for a second".
+    app.sim.history.extend((0..second - 1).map(|_| apart(1.6)));
+    update::hint_order(&mut app);
+    assert!(app.note.is_none(), "{:?}", app.note);
+    app.sim.history.push_back(apart(1.6));
+    update::hint_order(&mut app);
+    let note = app.note.clone().expect("the hint");
+    assert_eq!(note.level, super::model::Level::Warn);
+    assert!(note.text.contains("try order colored"), "{}", note.text);
+    // Said once while it holds.
+    app.note = None;
+    update::hint_order(&mut app);
+    assert!(app.note.is_none());
+    // A frame back under the limit ends it; under colored there is no hint at all.
+    app.sim.history.push_back(apart(1.2));
+    update::hint_order(&mut app);
+    assert!(!app.order_hinted);
+    while app.selected != PARAMS.len() + 1 {
+        press(&mut app, KeyCode::Down);
+    }
+    press(&mut app, KeyCode::Left);
+    assert_eq!(app.sim.options()["order"], "colored");
+    app.note = None;
+    app.sim.history.extend((0..2 * second).map(|_| apart(3.0)));
+    update::hint_order(&mut app);
+    assert!(app.note.is_none(), "{:?}", app.note);
+}
+
+#[cfg(feature = "implicit")]
+#[test]
+fn switching_solver_takes_its_steps_unless_they_were_edited_or_given() {
+    let mut app = app_with("pinned4", true);
+    select(&mut app, "solver");
+    assert_eq!(app.sim.settings.params.steps_per_frame, 30);
+    press(&mut app, KeyCode::Right);
+    assert_eq!(app.sim.entry().name(), "implicit");
+    assert_eq!(app.sim.settings.params.steps_per_frame, 1);
+    let note = app.note.clone().unwrap().text;
+    assert!(note.contains("steps/frame follow it: 30 -> 1"), "{note}");
+    // Not an edit: the row is the scene's value for this solver, and going back follows too.
+    assert!(app.sim.steps_follow_solver());
+    press(&mut app, KeyCode::Left);
+    assert_eq!(app.sim.settings.params.steps_per_frame, 30);
+    // Edited steps stay.
+    select(&mut app, "steps/frame");
+    press(&mut app, KeyCode::Left);
+    assert_eq!(app.sim.settings.params.steps_per_frame, 29);
+    select(&mut app, "solver");
+    press(&mut app, KeyCode::Right);
+    assert_eq!(app.sim.settings.params.steps_per_frame, 29);
+    let note = app.note.clone().unwrap().text;
+    assert!(note.contains("steps/frame stay 29, as edited"), "{note}");
+    // Steps the scene gives stay for every solver.
+    let args = Args {
+        scene: "pinned4".to_owned(),
+        sets: vec!["simulation.simulation_steps=30".to_owned()],
+        paused: true,
+        ..Args::default()
+    };
+    let mut app = build_in(
+        &args,
+        &crate::default_registry(),
+        false,
+        &cloth_render::ColorEnv::default(),
+    )
+    .unwrap();
+    select(&mut app, "solver");
+    press(&mut app, KeyCode::Right);
+    assert_eq!(app.sim.settings.params.steps_per_frame, 30);
+    let note = app.note.clone().unwrap().text;
+    assert!(note.contains("as the scene gives them"), "{note}");
+    // `--solver` starts at the solver's steps unless the scene gives them.
+    let args = Args {
+        scene: "pinned4".to_owned(),
+        solver: Some("fast-implicit".to_owned()),
+        paused: true,
+        ..Args::default()
+    };
+    let app = build_in(
+        &args,
+        &crate::default_registry(),
+        false,
+        &cloth_render::ColorEnv::default(),
+    )
+    .unwrap();
+    assert_eq!(app.sim.settings.params.steps_per_frame, 1);
+    assert_eq!(app.sim.scene_settings().params.steps_per_frame, 1);
 }

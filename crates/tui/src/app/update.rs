@@ -295,7 +295,21 @@ pub fn run_owed(app: &mut App, more: &mut dyn FnMut() -> bool) -> u64 {
             break;
         }
     }
+    hint_order(app);
     n
+}
+
+/// Says once, while it holds, that the cloth is coming apart under the faithful order and
+/// `colored` may hold it (see [`super::sim::Simulation::order_hint`]).
+pub fn hint_order(app: &mut App) {
+    match app.sim.order_hint() {
+        Some(hint) if !app.order_hinted => {
+            app.order_hinted = true;
+            app.say(Level::Warn, hint);
+        }
+        Some(_) => {}
+        None => app.order_hinted = false,
+    }
 }
 
 /// The simulation failed: pause and explain.
@@ -408,6 +422,7 @@ pub fn adopt(app: &mut App) -> bool {
     for e in got.errors {
         app.say(Level::Error, e);
     }
+    hint_order(app);
     if app.sim.fault.is_some() && app.running {
         stopped(app);
     } else if !got.running && app.running && app.sim.fault.is_none() {
@@ -552,15 +567,29 @@ fn cycle_solver(app: &mut App, dir: i32) {
         let name = all[(at + i * i64::from(dir.signum())).rem_euclid(n) as usize];
         match app.sim.set_solver(name) {
             Ok(()) => {
+                let was = before.0.params.steps_per_frame;
                 app.undo.push(before);
                 app.selected = app.selected.min(row_count(&app.sim) - 1);
                 let entry = app.sim.entry();
-                let steps = entry.steps_per_frame();
-                let mut text = format!(
-                    "solver: {name} ({}; meant for {steps} step{} per frame)",
-                    entry.description(),
-                    if steps == 1 { "" } else { "s" }
-                );
+                let meant = entry.steps_per_frame();
+                let now = app.sim.settings.params.steps_per_frame;
+                let plural = |n: u32| if n == 1 { "" } else { "s" };
+                let steps = if now != was {
+                    format!("steps/frame follow it: {was} -> {now}")
+                } else if now == meant {
+                    format!("meant for {meant} step{} per frame", plural(meant))
+                } else {
+                    format!(
+                        "meant for {meant} step{} per frame; steps/frame stay {now}, as {}",
+                        plural(meant),
+                        if app.sim.scene.gives_steps() && app.sim.steps_follow_solver() {
+                            "the scene gives them"
+                        } else {
+                            "edited"
+                        }
+                    )
+                };
+                let mut text = format!("solver: {name} ({}; {steps})", entry.description());
                 if let Some(first) = refused.first() {
                     text = format!("{text}; skipped: {first}");
                 }
@@ -587,7 +616,7 @@ fn edit_value(app: &mut App) {
     let p = row(&app.sim, app.selected);
     match p.kind {
         Kind::Solver => cycle_solver(app, 1),
-        Kind::Toggle => nudge(app, 1, false),
+        Kind::Toggle | Kind::Choice { .. } => nudge(app, 1, false),
         Kind::Number { .. } => match (p.get)(&app.sim.settings) {
             Some(v) => {
                 // Full precision, so accepting the prompt unchanged changes nothing.

@@ -123,26 +123,13 @@ macro_rules! fused_pass {
                 // group).
                 assert!(out.iter().chain(&total).all(|p| !p.is_null()));
 
-                // The rows of points as flat `x, y, z` streams of `3 nw` values.
-                const { assert!(size_of::<Vec3>() == 3 * size_of::<f64>()) };
-                let (pos_row, next_row) = (&positions[..nw], &mut next[..nw]);
-                // SAFETY: a `Vec3` is nalgebra's `repr(C)` matrix over a `repr(transparent)` array
-                // storage, `[[f64; 3]; 1]`: three contiguous f64s with no padding (size checked
-                // above), so `nw` of them are `3 nw` f64s.
-                let p_flat: &[f64] =
-                    unsafe { std::slice::from_raw_parts(pos_row.as_ptr().cast(), 3 * nw) };
-                // SAFETY: as above, and `next_row`'s exclusive borrow is handed over for the view's
-                // life.
-                let l_flat: &mut [f64] =
-                    unsafe { std::slice::from_raw_parts_mut(next_row.as_mut_ptr().cast(), 3 * nw) };
+                // The rows of points as flat `x, y, z` streams of `3 nw` values (`Vec3` is
+                // `Pod` through nalgebra's `convert-bytemuck`: three f64s, no padding).
+                let p_flat: &[f64] = bytemuck::cast_slice(&positions[..nw]);
+                let l_flat: &mut [f64] = bytemuck::cast_slice_mut(&mut next[..nw]);
                 // Row y + 1, which the loop copies into its ring slot as it goes, or none.
-                let ahead_flat: Option<&[f64]> = match ahead.len() {
-                    0 => None,
-                    // SAFETY: as above.
-                    _ => Some(unsafe {
-                        std::slice::from_raw_parts(ahead[..nw].as_ptr().cast(), 3 * nw)
-                    }),
-                };
+                let ahead_flat: Option<&[f64]> =
+                    (!ahead.is_empty()).then(|| bytemuck::cast_slice(&ahead[..nw]));
                 let keep = _mm256_set1_pd(params.keep);
                 let scale = _mm256_set1_pd(params.scale);
                 let k = params.k.map(|k| _mm256_set1_pd(k));
