@@ -79,6 +79,23 @@ impl Renderer {
         Self::default()
     }
 
+    /// Bytes a renderer's buffers and the frame it fills take, for a cloth of `points` points
+    /// drawn into a frame of `cells` character cells in `mode`: per point a normal, a
+    /// projected vertex and its shades; per pixel a depth, a material and a shade; per cell
+    /// the frame's cell.
+    #[must_use]
+    pub fn memory_estimate(points: usize, cells: usize, mode: Mode) -> u64 {
+        let (sx, sy) = mode.pixels_per_cell();
+        let per_point = size_of::<Vec3>() + size_of::<Option<Projected>>() + size_of::<[f32; 2]>();
+        let per_pixel = size_of::<f64>() + size_of::<Material>() + size_of::<f32>();
+        let per_cell = size_of::<Cell>();
+        let pixels = cells.saturating_mul(sx * sy);
+        (points as u64)
+            .saturating_mul(per_point as u64)
+            .saturating_add((pixels as u64).saturating_mul(per_pixel as u64))
+            .saturating_add((cells as u64).saturating_mul(per_cell as u64))
+    }
+
     /// Draws `state` of `mesh` with its `colliders` as seen by `view` into `frame`, at the
     /// frame's size.
     ///

@@ -72,6 +72,11 @@ pub struct Args {
     #[arg(long, default_value = "ascii", ignore_case = true,
           value_parser = crate::cli::mode_parser())]
     pub mode: Mode,
+    /// Most memory a cloth may take (e.g. 512M, 4G; powers of 1024): a scene whose solver,
+    /// states and frames would need more is refused, at start and when opened. Default: the
+    /// memory the system has available.
+    #[arg(long, value_name = "SIZE", value_parser = crate::memory::parse_size)]
+    pub max_memory: Option<u64>,
 }
 
 impl Default for Args {
@@ -85,6 +90,7 @@ impl Default for Args {
             color: ColorChoice::Auto,
             no_mouse: false,
             mode: Mode::Ascii,
+            max_memory: None,
         }
     }
 }
@@ -101,8 +107,19 @@ pub fn build_in(
     env: &ColorEnv,
 ) -> anyhow::Result<App> {
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
+    let choice = crate::solvers::choose(registry, &scene, args.solver.as_deref())?;
+    let need = crate::memory::ui_need(&choice.entry, &choice.options, &scene.mesh);
+    let who = crate::memory::solver(&choice.entry);
+    crate::memory::check(
+        &scene.origin,
+        &who,
+        &scene.mesh,
+        need,
+        (args.max_memory, crate::memory::SMALLER_SCENE),
+    )?;
     let sim = Simulation::new(scene, registry.clone(), args.solver.as_deref())?;
     let mut app = App::new(sim, !args.paused);
+    app.max_memory = args.max_memory;
     let depth = args.color.resolve(is_tty, env);
     app.color_allowed = depth != ColorDepth::None;
     // NOTE: with colour off, C still turns the cloth's colour on, at the terminal's depth.

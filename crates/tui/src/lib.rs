@@ -24,6 +24,7 @@ mod bench;
 mod cli;
 mod guard;
 mod headless;
+mod memory;
 mod output;
 mod progress;
 mod render;

@@ -8,6 +8,7 @@ use cloth_mesh::{ClothMesh, ClothState, vertex_normals};
 use cloth_solver::Registry;
 
 use crate::guard::Guard;
+use crate::memory::{self, Need};
 use crate::progress::{Progress, When};
 use crate::state_file::StateFile;
 use crate::{headless, output, solvers};
@@ -42,6 +43,11 @@ pub struct Args {
     #[arg(long, value_enum, value_name = "WHEN", default_value_t = When::Auto,
           num_args = 0..=1, default_missing_value = "always")]
     progress: When,
+    /// Most memory the run may take (e.g. 512M, 4G; powers of 1024): a cloth whose solver,
+    /// states and frames would need more is refused before they are allocated. Default: the
+    /// memory the system has available.
+    #[arg(long, value_name = "SIZE", value_parser = crate::memory::parse_size)]
+    max_memory: Option<u64>,
 }
 
 enum Format {
@@ -76,6 +82,15 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let scene = cloth_scene::load(&args.scene, &args.sets)?;
     headless::note_shadowing(&args.scene);
     let choice = solvers::choose(registry, &scene, args.solver.as_deref())?;
+    // The state, and its JSON text: about three states' bytes.
+    let need = Need::new(&choice.entry, &choice.options, &scene.mesh, 4, 0);
+    memory::check(
+        &scene.origin,
+        &memory::solver(&choice.entry),
+        &scene.mesh,
+        need,
+        (args.max_memory, memory::SMALLER_SCENE),
+    )?;
     let mut solver = choice.build(&scene.mesh)?;
     let explicit = choice.entry.is_explicit();
     let params = scene.params;

@@ -271,6 +271,8 @@ pub struct App {
     pub sent: (Settings, &'static str),
     /// Scenes the picker offers to open a file from, and where save writes by default.
     pub cwd: PathBuf,
+    /// `--max-memory`: most bytes a scene opened may need (`None`: the memory available).
+    pub max_memory: Option<u64>,
 }
 
 impl App {
@@ -315,6 +317,7 @@ impl App {
             drag: None,
             quit: false,
             cwd: PathBuf::from("."),
+            max_memory: None,
         }
     }
 
