@@ -1,7 +1,7 @@
 //! How the implicit solvers are offered by name: their registry entries and options.
 
 use cloth_mesh::ClothMesh;
-use cloth_solver::{OptionError, OptionKind, Solver, SolverEntry, SolverOption};
+use cloth_solver::{OptionError, OptionKind, Solver, SolverEntry, SolverOption, SpatialHash};
 use serde_json::Value;
 
 use crate::{DEFAULT_ITERATIONS, FastImplicit, ImplicitEuler, NEWTON_TOLERANCE};
@@ -15,6 +15,7 @@ impl ImplicitEuler {
         build_implicit,
     )
     .with_steps_per_frame(1)
+    .with_memory_estimate(implicit_memory)
     .with_options(&[SolverOption {
         name: "tolerance",
         description: "Newton stops once an iteration moves no point farther than this, metres",
@@ -35,6 +36,7 @@ impl FastImplicit {
         build_fast,
     )
     .with_steps_per_frame(1)
+    .with_memory_estimate(fast_memory)
     .with_options(&[SolverOption {
         name: "iterations",
         description: "local/global iterations per step: more is stiffer and closer to implicit",
@@ -44,6 +46,16 @@ impl FastImplicit {
             default: DEFAULT_ITERATIONS as i64,
         },
     }]);
+}
+
+/// [`ImplicitEuler::memory_estimate`] and the self-collision hash it shares with Verlet.
+fn implicit_memory(mesh: &ClothMesh, _options: &Value) -> u64 {
+    ImplicitEuler::memory_estimate(mesh).saturating_add(SpatialHash::memory_estimate(mesh.len(), 1))
+}
+
+/// [`FastImplicit::memory_estimate`] and the self-collision hash it shares with Verlet.
+fn fast_memory(mesh: &ClothMesh, _options: &Value) -> u64 {
+    FastImplicit::memory_estimate(mesh).saturating_add(SpatialHash::memory_estimate(mesh.len(), 1))
 }
 
 fn build_implicit(_mesh: &ClothMesh, options: &Value) -> Result<Box<dyn Solver>, OptionError> {

@@ -3,6 +3,8 @@
 
 use std::fmt;
 
+use cloth_solver::{available_memory, human_bytes};
+
 /// A buffer that could not be allocated: what it was for and how large it was.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Allocation {
@@ -21,22 +23,6 @@ impl fmt::Display for Allocation {
             human_bytes(self.bytes),
             self.what
         )
-    }
-}
-
-/// `bytes` as a short human-readable size.
-pub(crate) fn human_bytes(bytes: u64) -> String {
-    const UNITS: [&str; 5] = ["bytes", "KiB", "MiB", "GiB", "TiB"];
-    let mut value = bytes as f64;
-    let mut unit = 0;
-    while value >= 1024.0 && unit + 1 < UNITS.len() {
-        value /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{bytes} bytes")
-    } else {
-        format!("{value:.1} {}", UNITS[unit])
     }
 }
 
@@ -65,20 +51,6 @@ pub(crate) fn check_available(bytes: u64, what: &'static str) -> Result<(), Allo
     }
 }
 
-/// `MemAvailable` from `/proc/meminfo`, bytes, where there is one.
-fn available_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line
-        .trim_start_matches("MemAvailable:")
-        .trim()
-        .trim_end_matches("kB")
-        .trim()
-        .parse()
-        .ok()?;
-    kib.checked_mul(1024)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -89,11 +61,5 @@ mod tests {
         assert_eq!(e.what, "a test buffer");
         assert!(e.to_string().contains("a test buffer"), "{e}");
         assert!(check_available(u64::MAX, "everything").is_err() || available_memory().is_none());
-    }
-
-    #[test]
-    fn sizes_read_as_binary_units() {
-        assert_eq!(human_bytes(512), "512 bytes");
-        assert_eq!(human_bytes(11_488_248_432), "10.7 GiB");
     }
 }

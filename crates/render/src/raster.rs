@@ -33,6 +33,18 @@ pub(crate) enum Material {
     FloorEdge,
 }
 
+/// Which pixels a line may write.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum LineFill {
+    /// Any pixel where it is nearer than what is there.
+    Nearer,
+    /// Only pixels where nothing is drawn yet (lines that must never hide anything).
+    Empty,
+    /// Pixels where it is nearer than what is there, except the cloth's own: the outline of a
+    /// cloth already drawn, filling only the pixels its triangles left out.
+    Outline,
+}
+
 /// The pixel buffers a frame is drawn into.
 pub(crate) struct Target<'a> {
     pub width: usize,
@@ -129,10 +141,11 @@ impl Target<'_> {
         covered
     }
 
-    /// Draws a depth-tested line from `a` to `b`, one sample per pixel step, interpolating
-    /// shade. Used for triangles too thin to cover a pixel centre (a cloth seen edge-on), so a
-    /// sheet never vanishes between pixel rows. With `only_empty` it writes only where nothing
-    /// is drawn yet (lines that must never hide anything).
+    /// Draws a line from `a` to `b` into every pixel it passes through, one sample per pixel
+    /// step, interpolating depth and shade; `fill` says which pixels it may write. Used for
+    /// triangles too thin to cover a pixel centre (a cloth seen edge-on), so a sheet never
+    /// vanishes between pixel rows, and for the cloth's outline, so its border covers every
+    /// pixel it runs through (see `draw_cloth`).
     pub fn line(
         &mut self,
         a: Projected,
@@ -140,7 +153,7 @@ impl Target<'_> {
         sa: f32,
         sb: f32,
         material: Material,
-        only_empty: bool,
+        fill: LineFill,
     ) {
         if [a, b]
             .iter()
@@ -162,15 +175,19 @@ impl Target<'_> {
             }
             let depth = a.depth + (b.depth - a.depth) * t;
             let shade = sa + (sb - sa) * t as f32;
-            if only_empty {
-                let k = yi * self.width + xi;
-                if self.material[k] == Material::Empty {
-                    self.depth[k] = depth;
-                    self.material[k] = material;
-                    self.shade[k] = shade;
+            let k = yi * self.width + xi;
+            let write = match fill {
+                LineFill::Nearer => depth < self.depth[k],
+                LineFill::Empty => self.material[k] == Material::Empty,
+                LineFill::Outline => {
+                    depth < self.depth[k]
+                        && !matches!(self.material[k], Material::Front | Material::Back)
                 }
-            } else {
-                self.plot(xi, yi, depth, material, shade);
+            };
+            if write {
+                self.depth[k] = depth;
+                self.material[k] = material;
+                self.shade[k] = shade;
             }
         }
     }
@@ -304,7 +321,7 @@ mod tests {
             1.0,
             1.0,
             Material::Front,
-            false,
+            LineFill::Nearer,
         );
         assert!((0..10).all(|x| b.material[50 + x] == Material::Front));
     }

@@ -7,7 +7,7 @@ use crate::bounds::plane_basis;
 use crate::glyphs::{
     BACK_RAMP, FLOOR_GLYPH, FRONT_RAMP, PIN_GLYPH, SPHERE_RAMP, bayer_threshold, ramp_glyph,
 };
-use crate::raster::{Material, Target};
+use crate::raster::{LineFill, Material, Target};
 use crate::{
     AsciiFrame, Bounds, Camera, Cell, Extent, Light, Mode, Projected, RenderError, RenderOptions,
     Rgb, ViewSpec,
@@ -77,6 +77,23 @@ impl Renderer {
     #[must_use]
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Bytes a renderer's buffers and the frame it fills take, for a cloth of `points` points
+    /// drawn into a frame of `cells` character cells in `mode`: per point a normal, a
+    /// projected vertex and its shades; per pixel a depth, a material and a shade; per cell
+    /// the frame's cell.
+    #[must_use]
+    pub fn memory_estimate(points: usize, cells: usize, mode: Mode) -> u64 {
+        let (sx, sy) = mode.pixels_per_cell();
+        let per_point = size_of::<Vec3>() + size_of::<Option<Projected>>() + size_of::<[f32; 2]>();
+        let per_pixel = size_of::<f64>() + size_of::<Material>() + size_of::<f32>();
+        let per_cell = size_of::<Cell>();
+        let pixels = cells.saturating_mul(sx * sy);
+        (points as u64)
+            .saturating_mul(per_point as u64)
+            .saturating_add((pixels as u64).saturating_mul(per_pixel as u64))
+            .saturating_add((cells as u64).saturating_mul(per_cell as u64))
     }
 
     /// Draws `state` of `mesh` with its `colliders` as seen by `view` into `frame`, at the
@@ -152,11 +169,13 @@ impl Renderer {
         draw_cloth(
             &mut target,
             mesh,
-            positions,
             &self.screen,
             &self.vertex_shade,
-            &camera,
-            options.two_sided,
+            &Faces {
+                positions,
+                camera: &camera,
+                two_sided: options.two_sided,
+            },
         );
         for c in shown {
             match c {
@@ -165,11 +184,34 @@ impl Renderer {
             }
         }
 
+        // NOTE: the outline is drawn after the contrast stretch, with its mapping: it adds
+        // pixels along the border only, and must not shift the glyphs of the whole face.
+        let mut mapping = [None, None];
         if options.auto_contrast {
-            for face in [Material::Front, Material::Back] {
-                stretch(face, &self.material, &mut self.shade);
+            for (map, face) in mapping.iter_mut().zip([Material::Front, Material::Back]) {
+                *map = stretch(face, &self.material, &mut self.shade);
             }
         }
+        let mut target = Target {
+            width: pw,
+            height: ph,
+            depth: &mut self.depth,
+            material: &mut self.material,
+            shade: &mut self.shade,
+        };
+        let faces = Faces {
+            positions,
+            camera: &camera,
+            two_sided: options.two_sided,
+        };
+        draw_outline(
+            &mut target,
+            mesh,
+            &self.screen,
+            &self.vertex_shade,
+            &faces,
+            mapping,
+        );
         compose(frame, options, &self.material, &self.shade, pw);
         if options.show_pins {
             let tol = PIN_DEPTH_TOLERANCE * content.diagonal();
@@ -212,8 +254,9 @@ const CLIP: f64 = 0.02;
 /// evenly lit sheet stays flat instead of showing amplified rounding.
 const MIN_RANGE: f32 = 0.25;
 
-/// Remaps the shades of `face`'s pixels so their 2nd to 98th percentile fills [0, 1].
-fn stretch(face: Material, material: &[Material], shade: &mut [f32]) {
+/// Remaps the shades of `face`'s pixels so their 2nd to 98th percentile fills [0, 1]; returns
+/// the mapping, `(lo, range)` for `(s - lo) / range`, or `None` when the face has no pixels.
+fn stretch(face: Material, material: &[Material], shade: &mut [f32]) -> Option<(f32, f32)> {
     let mut hist = [0u32; BINS];
     let mut count = 0u32;
     for (m, s) in material.iter().zip(shade.iter()) {
@@ -223,7 +266,7 @@ fn stretch(face: Material, material: &[Material], shade: &mut [f32]) {
         }
     }
     if count == 0 {
-        return;
+        return None;
     }
     let cut = (f64::from(count) * CLIP) as u32;
     let percentile = |bins: &mut dyn Iterator<Item = usize>| {
@@ -247,39 +290,53 @@ fn stretch(face: Material, material: &[Material], shade: &mut [f32]) {
             *s = ((*s - lo) / range).clamp(0.0, 1.0);
         }
     }
+    Some((lo, range))
 }
 
 /// Colour of a pin marker.
 const PIN_COLOUR: Rgb = Rgb(255, 70, 70);
 
-/// Rasterises every cloth triangle, choosing the face by its geometric normal against the
-/// direction to the viewer; triangles thinner than a pixel also get their edges drawn, so a
-/// sheet seen edge-on stays a visible line instead of falling between pixel centres.
+/// What decides which face of the cloth a triangle shows.
+struct Faces<'a> {
+    positions: &'a [Vec3],
+    camera: &'a Camera,
+    two_sided: bool,
+}
+
+impl Faces<'_> {
+    /// The face triangle `a b c` shows, by its geometric normal against the direction to the
+    /// viewer, and its index in the vertex shades; `None` for a back face not drawn.
+    fn of(&self, a: usize, b: usize, c: usize) -> Option<(Material, usize)> {
+        let (wa, wb, wc) = (self.positions[a], self.positions[b], self.positions[c]);
+        let normal = (wb - wa).cross(&(wc - wa));
+        let towards = self.camera.towards_viewer((wa + wb + wc) / 3.0);
+        if normal.dot(&towards) >= 0.0 {
+            Some((Material::Front, 0))
+        } else if self.two_sided {
+            Some((Material::Back, 1))
+        } else {
+            None
+        }
+    }
+}
+
+/// Rasterises every cloth triangle, choosing the face it shows ([`Faces::of`]); triangles
+/// thinner than a pixel also get their edges drawn, so a sheet seen edge-on stays a visible
+/// line instead of falling between pixel centres.
 fn draw_cloth(
     target: &mut Target<'_>,
     mesh: &ClothMesh,
-    positions: &[Vec3],
     screen: &[Option<Projected>],
     vertex_shade: &[[f32; 2]],
-    camera: &Camera,
-    two_sided: bool,
+    faces: &Faces<'_>,
 ) {
     for &[a, b, c] in mesh.triangles() {
         let (a, b, c) = (a as usize, b as usize, c as usize);
         let (Some(pa), Some(pb), Some(pc)) = (screen[a], screen[b], screen[c]) else {
             continue;
         };
-        let (wa, wb, wc) = (positions[a], positions[b], positions[c]);
-        let normal = (wb - wa).cross(&(wc - wa));
-        let towards = camera.towards_viewer((wa + wb + wc) / 3.0);
-        let front = normal.dot(&towards) >= 0.0;
-        if !front && !two_sided {
+        let Some((material, k)) = faces.of(a, b, c) else {
             continue;
-        }
-        let (material, k) = if front {
-            (Material::Front, 0)
-        } else {
-            (Material::Back, 1)
         };
         let s = [vertex_shade[a][k], vertex_shade[b][k], vertex_shade[c][k]];
         let v = [pa, pb, pc];
@@ -298,8 +355,58 @@ fn draw_cloth(
                 }
             }
             if area2 * area2 < longest2 {
-                target.line(v[i], v[j], s[i], s[j], material, false);
+                target.line(v[i], v[j], s[i], s[j], material, LineFill::Nearer);
             }
+        }
+    }
+}
+
+/// Draws the cloth's border (the edges along the grid's first and last rows and columns) as
+/// lines into the pixels it passes through that its triangles left to the background, each in
+/// the face of its triangle, its shades remapped by `mapping` (the front's and the back's
+/// contrast stretch, when there was one).
+///
+/// NOTE: a triangle covers the pixels whose centres it contains (with the top-left rule on its
+/// edges), which leaves a pixel the border passes through empty whenever the border runs
+/// between the pixel's centre and the cloth. An edge of the grid that lies along a pixel row
+/// (a pinned edge in the top view) runs within a hair of the row's centres, on one side or the
+/// other as it sags, so the row came out dashed. Inside the cloth every pixel centre lies in
+/// some triangle: only the border needs the pixels it passes through.
+fn draw_outline(
+    target: &mut Target<'_>,
+    mesh: &ClothMesh,
+    screen: &[Option<Projected>],
+    vertex_shade: &[[f32; 2]],
+    faces: &Faces<'_>,
+    mapping: [Option<(f32, f32)>; 2],
+) {
+    let (nw, nh) = (mesh.nw(), mesh.nh());
+    // Whether `a -> b` is an edge of the border: neighbours along the first or last row or
+    // column.
+    let border = |a: usize, b: usize| {
+        let ((xa, ya), (xb, yb)) = ((a % nw, a / nw), (b % nw, b / nw));
+        (ya == yb && (ya == 0 || ya == nh - 1) && xa.abs_diff(xb) == 1)
+            || (xa == xb && (xa == 0 || xa == nw - 1) && ya.abs_diff(yb) == 1)
+    };
+    for &[a, b, c] in mesh.triangles() {
+        let t = [a as usize, b as usize, c as usize];
+        for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+            let (p, q) = (t[i], t[j]);
+            if !border(p, q) {
+                continue;
+            }
+            let (Some(pp), Some(pq)) = (screen[p], screen[q]) else {
+                continue;
+            };
+            let Some((material, k)) = faces.of(t[0], t[1], t[2]) else {
+                continue;
+            };
+            let map = |s: f32| match mapping[k] {
+                Some((lo, range)) => ((s - lo) / range).clamp(0.0, 1.0),
+                None => s,
+            };
+            let (sp, sq) = (map(vertex_shade[p][k]), map(vertex_shade[q][k]));
+            target.line(pp, pq, sp, sq, material, LineFill::Outline);
         }
     }
 }
@@ -425,7 +532,7 @@ fn draw_floor(target: &mut Target<'_>, camera: &Camera, plane: &Plane, over: &Bo
             ) else {
                 continue;
             };
-            target.line(p, q, 0.5, 0.5, Material::FloorEdge, true);
+            target.line(p, q, 0.5, 0.5, Material::FloorEdge, LineFill::Empty);
         }
     }
 }
@@ -656,14 +763,16 @@ mod tests {
                 );
             }
         }
-        // The margin stays empty.
+        // The border runs through the cells it passes (row 0 from 0.8 rows down, column 1 from
+        // 1.6 columns in); the margin beyond it stays empty.
         assert!(
-            frame
-                .row(0)
-                .iter()
-                .all(|c| c.glyph == ' ' || c.glyph == PIN_GLYPH)
+            (2..38).all(|x| FRONT_RAMP.contains(&frame.get(x, 0).unwrap().glyph)
+                || frame.get(x, 0).unwrap().glyph == PIN_GLYPH),
+            "{}",
+            glyphs(&frame)
         );
-        assert_eq!(frame.get(0, 10).unwrap().glyph, ' ');
+        assert!((0..20).all(|y| frame.get(0, y).unwrap().glyph == ' '));
+        assert!((0..40).all(|x| frame.get(x, 19).unwrap().glyph != ' ' || !(2..38).contains(&x)));
     }
 
     #[test]
@@ -746,6 +855,48 @@ mod tests {
         let frame = draw(&mesh, &tilted, &[], View::Top, &options);
         // 0.5 * 8 = level 4 exactly; the dither may round either way by at most one.
         assert!((3..=5).contains(&level(&frame)), "{}", level(&frame));
+    }
+
+    #[test]
+    fn a_pinned_edge_seen_from_the_top_has_no_gaps_at_200x60() {
+        // A 50 x 50 cloth pinned at the two ends of its first row, that row pulled inwards by
+        // up to 3 mm as a sagging cloth pulls it (0.17 rows at this size): the edge then runs
+        // just past the centres of the pixel row it lies in, and the cloth must still cover
+        // that row from pin to pin.
+        let mesh = ClothMesh::new(&GridSpec {
+            pinned: vec![(0, 0), (49, 0)],
+            ..GridSpec::default()
+        })
+        .unwrap();
+        let mut state = ClothState::new(&mesh);
+        for i in 0..50 {
+            state.positions[i].z += 0.003 * (std::f64::consts::PI * i as f64 / 49.0).sin();
+        }
+        let mut frame = AsciiFrame::new(FrameSize::new(200, 60).unwrap());
+        Renderer::new()
+            .render(
+                &mesh,
+                &state,
+                &[],
+                &ViewSpec::new(View::Top, &mesh),
+                &RenderOptions::default(),
+                &mut frame,
+            )
+            .unwrap();
+        let pins: Vec<(usize, usize)> = (0..60)
+            .flat_map(|y| (0..200).map(move |x| (x, y)))
+            .filter(|&(x, y)| frame.get(x, y).unwrap().glyph == PIN_GLYPH)
+            .collect();
+        assert_eq!(pins.len(), 2, "{pins:?}\n{}", glyphs(&frame));
+        let (y, x0, x1) = (pins[0].1, pins[0].0, pins[1].0);
+        let gaps: Vec<usize> = (x0..x1)
+            .filter(|&x| frame.get(x, y).unwrap().glyph == ' ')
+            .collect();
+        assert!(
+            gaps.is_empty(),
+            "gaps at columns {gaps:?}\n{}",
+            glyphs(&frame)
+        );
     }
 
     #[test]

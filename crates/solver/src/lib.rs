@@ -16,6 +16,7 @@
 mod diagnostics;
 mod disjoint;
 mod error;
+mod memory;
 mod reference;
 mod registry;
 mod self_collision;
@@ -45,9 +46,11 @@ pub use cloth_mesh::{
 };
 pub use diagnostics::{kinetic_energy, max_stretch_ratio};
 pub use error::SolveError;
+pub use memory::{available_memory, human_bytes};
 pub use reference::reference_step;
 pub use registry::{
-    BuildSolver, OptionError, OptionKind, Registry, SolverEntry, SolverOption, UnknownSolver,
+    BuildSolver, EstimateMemory, OptionError, OptionKind, Registry, SolverEntry, SolverOption,
+    UnknownSolver, default_memory_estimate,
 };
 pub use self_collision::SpatialHash;
 pub use stretch::limit_stretch;

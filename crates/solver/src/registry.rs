@@ -131,7 +131,31 @@ impl SolverOption {
 /// Builds a solver for a mesh from its checked options (see [`SolverEntry::build`]).
 pub type BuildSolver = fn(&ClothMesh, &Value) -> Result<Box<dyn Solver>, OptionError>;
 
-/// How a solver is offered to users: a name, a description, its options and a constructor.
+/// The bytes a solver allocates for a mesh with its checked options (see
+/// [`SolverEntry::memory_estimate`]).
+pub type EstimateMemory = fn(&ClothMesh, &Value) -> u64;
+
+/// The estimate of an entry that states none: eight arrays of a position per point (the state
+/// itself is not counted) and two words per spring, about what an explicit solver with scratch
+/// copies of the positions and a self-collision hash keeps.
+///
+/// ```
+/// let mesh = cloth_solver::ClothMesh::new(&cloth_mesh::GridSpec::default())
+///     .map_err(|e| e.to_string())?;
+/// let bytes = cloth_solver::default_memory_estimate(&mesh);
+/// assert_eq!(bytes, 8 * 24 * 2500 + 16 * mesh.springs().len() as u64);
+/// # Ok::<(), String>(())
+/// ```
+#[must_use]
+pub fn default_memory_estimate(mesh: &ClothMesh) -> u64 {
+    let point = 8 * std::mem::size_of::<crate::Vec3>() as u64;
+    (mesh.len() as u64)
+        .saturating_mul(point)
+        .saturating_add((mesh.springs().len() as u64).saturating_mul(16))
+}
+
+/// How a solver is offered to users: a name, a description, its options, a constructor and
+/// (optionally) the memory it needs.
 ///
 /// Entries are `const`-built, so a solver crate can publish one per solver as an associated
 /// constant:
@@ -176,6 +200,7 @@ pub struct SolverEntry {
     options: &'static [SolverOption],
     explicit: bool,
     build: BuildSolver,
+    memory: Option<EstimateMemory>,
 }
 
 impl fmt::Debug for SolverEntry {
@@ -186,6 +211,7 @@ impl fmt::Debug for SolverEntry {
             .field("steps_per_frame", &self.steps_per_frame)
             .field("options", &self.options)
             .field("explicit", &self.explicit)
+            .field("states_its_memory", &self.memory.is_some())
             .finish_non_exhaustive()
     }
 }
@@ -203,7 +229,16 @@ impl SolverEntry {
             options: &[],
             explicit: false,
             build,
+            memory: None,
         }
+    }
+
+    /// Sets how the solver states the bytes it allocates for a mesh (see
+    /// [`SolverEntry::memory_estimate`]).
+    #[must_use]
+    pub const fn with_memory_estimate(mut self, estimate: EstimateMemory) -> Self {
+        self.memory = Some(estimate);
+        self
     }
 
     /// Sets the steps per frame the solver is meant to run at (at least 1), which tests and
@@ -258,6 +293,26 @@ impl SolverEntry {
     #[must_use]
     pub const fn is_explicit(&self) -> bool {
         self.explicit
+    }
+
+    /// The bytes the solver will allocate for `mesh` with `options` (its scratch and caches;
+    /// the cloth's state is the caller's), so that a caller can refuse a mesh too large for
+    /// the memory it has before anything is allocated. From the entry's own estimate
+    /// ([`SolverEntry::with_memory_estimate`]), or [`default_memory_estimate`] for an entry
+    /// that states none.
+    #[must_use]
+    pub fn memory_estimate(&self, mesh: &ClothMesh, options: &Value) -> u64 {
+        match self.memory {
+            Some(estimate) => estimate(mesh, options),
+            None => default_memory_estimate(mesh),
+        }
+    }
+
+    /// Whether the entry states its own memory estimate (else
+    /// [`SolverEntry::memory_estimate`] is [`default_memory_estimate`]).
+    #[must_use]
+    pub const fn states_its_memory(&self) -> bool {
+        self.memory.is_some()
     }
 
     /// The option called `key`, if the solver has one.
@@ -690,6 +745,26 @@ mod tests {
         assert_eq!(
             e.to_string(),
             "unknown solver \"rk4\"; the solvers are: demo, other"
+        );
+    }
+
+    #[test]
+    fn an_entry_states_its_memory_or_takes_the_default() {
+        fn per_point(mesh: &ClothMesh, options: &Value) -> u64 {
+            let bytes = options["bytes_per_point"].as_u64().unwrap_or(1);
+            bytes * mesh.len() as u64
+        }
+        let mesh = mesh();
+        assert!(!ENTRY.states_its_memory());
+        assert_eq!(
+            ENTRY.memory_estimate(&mesh, &Value::Null),
+            default_memory_estimate(&mesh)
+        );
+        let stated = SolverEntry::new("stated", "states it", plain).with_memory_estimate(per_point);
+        assert!(stated.states_its_memory());
+        assert_eq!(
+            stated.memory_estimate(&mesh, &json!({"bytes_per_point": 100})),
+            100 * 2500
         );
     }
 

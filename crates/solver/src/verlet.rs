@@ -145,6 +145,29 @@ impl Verlet {
         self.order
     }
 
+    /// Bytes the solver allocates for `mesh` on `threads` threads in `order`, self-collision
+    /// included (it can be turned on at any step): the springs by direction, the row buffers
+    /// of each band of the force sweep (one band on one thread, two per thread otherwise), the
+    /// stretch limit's bounds and band copies, the pins' last positions and the
+    /// [`SpatialHash`] ([`SpatialHash::memory_estimate`]). The state is the caller's and not
+    /// counted, nor are the worker threads' stacks.
+    #[must_use]
+    pub fn memory_estimate(mesh: &ClothMesh, threads: usize, order: ConstraintOrder) -> u64 {
+        let (nw, nh, n) = (mesh.nw(), mesh.nh(), mesh.len());
+        let pins = mesh.pinned().iter().filter(|&&p| p).count();
+        let threads = threads.max(1);
+        let bands = if threads == 1 {
+            1
+        } else {
+            (2 * threads).min(nh)
+        };
+        Stencil::bytes_for(n, pins)
+            + (pins * size_of::<Vec3>()) as u64
+            + bands as u64 * RowScratch::bytes_for(nw)
+            + StretchSweep::bytes_for(nw, nh, order)
+            + SpatialHash::memory_estimate(n, threads)
+    }
+
     /// Steps 1 and 2: forces and the Verlet update, leaving the new positions in `state.last`
     /// and the old ones in `state.positions` (the caller swaps them).
     fn forces_and_verlet(

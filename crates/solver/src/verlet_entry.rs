@@ -45,17 +45,30 @@ impl Verlet {
     )
     .with_steps_per_frame(crate::REFERENCE_STEPS_PER_FRAME)
     .with_options(OPTIONS)
+    .with_memory_estimate(memory_estimate)
     .explicit();
+}
+
+/// The options' order, or the faithful one when they do not name one.
+fn order_of(options: &Value) -> ConstraintOrder {
+    let name = Verlet::ENTRY.choice(options, "order").unwrap_or("faithful");
+    ORDERS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map_or(ConstraintOrder::Faithful, |&(_, o)| o)
+}
+
+/// [`Verlet::memory_estimate`] with the threads and order the options ask for.
+fn memory_estimate(mesh: &ClothMesh, options: &Value) -> u64 {
+    let threads = Verlet::ENTRY.integer(options, "threads").unwrap_or(1);
+    Verlet::memory_estimate(mesh, threads.max(1) as usize, order_of(options))
 }
 
 fn build(_mesh: &ClothMesh, options: &Value) -> Result<Box<dyn Solver>, OptionError> {
     let entry = Verlet::ENTRY;
     let threads = entry.integer(options, "threads")?;
-    let name = entry.choice(options, "order")?;
-    let order = ORDERS
-        .iter()
-        .find(|(n, _)| *n == name)
-        .map_or(ConstraintOrder::Faithful, |&(_, o)| o);
+    entry.choice(options, "order")?;
+    let order = order_of(options);
     let verlet = Verlet::new()
         .with_threads(threads as usize)
         .map_err(|e| OptionError::Failed {

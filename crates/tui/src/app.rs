@@ -83,6 +83,11 @@ pub struct Args {
     /// the scene's. The clock goes on from the state's time; R still resets to the flat start.
     #[arg(long, value_name = "STATE.json", value_hint = clap::ValueHint::FilePath)]
     pub from: Option<std::path::PathBuf>,
+    /// Most memory a cloth may take (e.g. 512M, 4G; powers of 1024): a scene whose solver,
+    /// states and frames would need more is refused, at start and when opened. Default: the
+    /// memory the system has available.
+    #[arg(long, value_name = "SIZE", value_parser = crate::memory::parse_size)]
+    pub max_memory: Option<u64>,
 }
 
 impl Default for Args {
@@ -98,6 +103,7 @@ impl Default for Args {
             no_mouse: false,
             mode: Mode::Ascii,
             from: None,
+            max_memory: None,
         }
     }
 }
@@ -115,11 +121,20 @@ pub fn build_in(
 ) -> anyhow::Result<App> {
     let mut scene = cloth_scene::load(&args.scene, &args.sets)?;
     // The flags become the scene's option keys, so they reach every solver chosen in the UI.
-    crate::solvers::prepare(
+    let choice = crate::solvers::prepare(
         registry,
         &mut scene,
         args.solver.as_deref(),
         &args.solver_flags,
+    )?;
+    let need = crate::memory::ui_need(&choice.entry, &choice.options, &scene.mesh);
+    let who = crate::memory::solver(&choice.entry);
+    crate::memory::check(
+        &scene.origin,
+        &who,
+        &scene.mesh,
+        need,
+        (args.max_memory, crate::memory::SMALLER_SCENE),
     )?;
     let mut sim = Simulation::new(scene, registry.clone(), args.solver.as_deref())?;
     if let Some(path) = &args.from {
@@ -127,6 +142,7 @@ pub fn build_in(
         sim.start_from(state, file.frames, file.time);
     }
     let mut app = App::new(sim, !args.paused);
+    app.max_memory = args.max_memory;
     let depth = args.color.resolve(is_tty, env);
     app.color_allowed = depth != ColorDepth::None;
     // NOTE: with colour off, C still turns the cloth's colour on, at the terminal's depth.

@@ -27,6 +27,7 @@ use cloth_solver::{Registry, Solver, SolverEntry, StepParams, max_stretch_ratio}
 use serde_json::{Map, Value};
 
 use crate::guard::Guard;
+use crate::memory::{self, Need};
 
 /// `clothsim bench` options.
 #[derive(Debug, clap::Args)]
@@ -65,6 +66,11 @@ pub struct Args {
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
+    /// Most memory the run may take (e.g. 512M, 4G; powers of 1024): a cloth whose solver,
+    /// states and frames would need more is refused before they are allocated. Default: the
+    /// memory the system has available.
+    #[arg(long, value_name = "SIZE", value_parser = crate::memory::parse_size)]
+    max_memory: Option<u64>,
 }
 
 /// On or off.
@@ -201,6 +207,7 @@ fn time_grid(args: &Args, configs: &[Config], n: usize) -> anyhow::Result<Vec<Ro
         );
     }
     let mesh = pinned_grid(n).with_context(|| format!("--grid {n}"))?;
+    check_memory(args, configs, &mesh, n)?;
     let run = BenchRun {
         warmup_frames: 90,
         frames: args.frames,
@@ -268,6 +275,34 @@ fn time_grid(args: &Args, configs: &[Config], n: usize) -> anyhow::Result<Vec<Ro
 ///
 /// # Errors
 /// The divergence, with its advice.
+/// Refuses grid `n` when a configuration would need more memory than `--max-memory` (or the
+/// memory available): without `--interleave` one configuration at a time, with it all at once.
+fn check_memory(args: &Args, configs: &[Config], mesh: &ClothMesh, n: usize) -> anyhow::Result<()> {
+    let origin = format!("--grid {n}");
+    let limit = (args.max_memory, "a smaller --grid");
+    let needs = configs
+        .iter()
+        .map(|c| (c, Need::new(&c.entry, &c.options, mesh, 1, 0)));
+    if args.interleave {
+        // Every configuration at once, sharing the mesh, each with its own state.
+        let mut all = Need {
+            solver: 0,
+            cloth: memory::mesh_bytes(mesh),
+            drawing: 0,
+        };
+        for (_, need) in needs {
+            all.solver = all.solver.saturating_add(need.solver);
+            all.cloth = all.cloth.saturating_add(memory::state_bytes(mesh));
+        }
+        let who = format!("--interleave's {} configurations", configs.len());
+        return memory::check(&origin, &who, mesh, all, limit);
+    }
+    for (config, need) in needs {
+        memory::check(&origin, &memory::solver(&config.entry), mesh, need, limit)?;
+    }
+    Ok(())
+}
+
 fn held_together(
     solver: &mut dyn Solver,
     mesh: &ClothMesh,

@@ -25,6 +25,7 @@ mod cli;
 mod export;
 mod guard;
 mod headless;
+mod memory;
 mod output;
 mod progress;
 mod render;

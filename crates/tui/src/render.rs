@@ -16,6 +16,7 @@ use cloth_render::{
 use cloth_solver::Registry;
 
 use crate::guard::{Divergence, Guard};
+use crate::memory::{self, Need};
 use crate::output::Stdout;
 use crate::progress::{Progress, When};
 use crate::state_file::StateFile;
@@ -125,6 +126,11 @@ pub struct Args {
     /// the scene's. Frame 0 is that state.
     #[arg(long, value_name = "STATE.json")]
     from: Option<std::path::PathBuf>,
+    /// Most memory the run may take (e.g. 512M, 4G; powers of 1024): a cloth whose solver,
+    /// states and frames would need more is refused before they are allocated. Default: the
+    /// memory the system has available.
+    #[arg(long, value_name = "SIZE", value_parser = crate::memory::parse_size)]
+    max_memory: Option<u64>,
 }
 
 /// Whether frame `f` (1-based; 0 is the start) of `frames` is printed.
@@ -163,11 +169,26 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     };
     let mut scene = cloth_scene::load(&args.scene, &args.sets)?;
     let choice = solvers::prepare(registry, &mut scene, args.solver.as_deref(), &args.flags)?;
+    let views = args.view.views();
+    // The start, the running state and the last good one.
+    let drawing = memory::drawing(
+        scene.mesh.len(),
+        views.len(),
+        args.size.width * args.size.height,
+        args.mode,
+    );
+    let need = Need::new(&choice.entry, &choice.options, &scene.mesh, 3, drawing);
+    memory::check(
+        &scene.origin,
+        &memory::solver(&choice.entry),
+        &scene.mesh,
+        need,
+        (args.max_memory, memory::SMALLER_SCENE),
+    )?;
     let start = match &args.from {
         Some(path) => StateFile::read(path, &scene.mesh, scene.params.dt())?.1,
         None => ClothState::new(&scene.mesh),
     };
-    let views = args.view.views();
     let options = RenderOptions {
         mode: args.mode,
         color: depth != ColorDepth::None,

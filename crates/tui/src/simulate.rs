@@ -8,6 +8,7 @@ use cloth_solver::Registry;
 
 use crate::export::{Animation, AnimationKind, Sampling, StatsFormat, StatsRow, StatsTable};
 use crate::guard::Guard;
+use crate::memory::{self, Need};
 use crate::progress::{Progress, When};
 use crate::state_file::StateFile;
 use crate::{export, headless, output, solvers};
@@ -56,6 +57,11 @@ pub struct Args {
     #[arg(long, value_enum, value_name = "WHEN", default_value_t = When::Auto,
           num_args = 0..=1, default_missing_value = "always")]
     progress: When,
+    /// Most memory the run may take (e.g. 512M, 4G; powers of 1024): a cloth whose solver,
+    /// states and frames would need more is refused before they are allocated. Default: the
+    /// memory the system has available.
+    #[arg(long, value_name = "SIZE", value_parser = crate::memory::parse_size)]
+    max_memory: Option<u64>,
 }
 
 enum Format {
@@ -114,6 +120,15 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let mut scene = cloth_scene::load(&args.scene, &args.sets)?;
     headless::note_shadowing(&args.scene);
     let choice = solvers::prepare(registry, &mut scene, args.solver.as_deref(), &args.flags)?;
+    // The state, and its JSON text: about three states' bytes.
+    let need = Need::new(&choice.entry, &choice.options, &scene.mesh, 4, 0);
+    memory::check(
+        &scene.origin,
+        &memory::solver(&choice.entry),
+        &scene.mesh,
+        need,
+        (args.max_memory, memory::SMALLER_SCENE),
+    )?;
     let mut solver = choice.build(&scene.mesh)?;
     let explicit = choice.entry.is_explicit();
     let params = scene.params;

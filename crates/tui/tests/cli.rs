@@ -847,3 +847,80 @@ fn a_chosen_solver_runs_at_its_steps_unless_the_scene_gives_them() {
     ]);
     assert_eq!(dt(&given), 1.0 / 90.0 / 30.0);
 }
+
+#[test]
+fn a_cloth_over_max_memory_is_refused_naming_the_estimate_and_the_limit() {
+    for args in [
+        &["simulate", "pinned4", "--frames", "1", "--max-memory", "1M"][..],
+        &["render", "pinned4", "--frames", "1", "--max-memory", "1M"],
+        &[
+            "bench",
+            "--grid",
+            "64",
+            "--frames",
+            "1",
+            "--max-memory",
+            "1M",
+        ],
+        &[
+            "bench",
+            "--grid",
+            "64",
+            "--frames",
+            "1",
+            "--interleave",
+            "--solver",
+            "verlet",
+            "--order",
+            "faithful",
+            "--order",
+            "colored",
+            "--max-memory",
+            "1M",
+        ],
+    ] {
+        let o = clothsim(args);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {e}");
+        assert!(o.stdout.is_empty(), "{args:?}: nothing is written");
+        // "needs about 1.4 MiB (...), more than the --max-memory limit of 1.0 MiB".
+        let estimate = e
+            .split("needs about ")
+            .nth(1)
+            .and_then(|rest| rest.split(" (").next())
+            .unwrap_or_else(|| panic!("{args:?}: no estimate in {e}"));
+        assert!(
+            estimate.ends_with("MiB") && estimate != "1.0 MiB",
+            "{args:?}: {e}"
+        );
+        assert!(
+            e.contains("more than the --max-memory limit of 1.0 MiB"),
+            "{args:?}: {e}"
+        );
+        assert!(e.contains("use a smaller"), "{args:?}: {e}");
+    }
+    // The same runs with room enough go ahead.
+    let o = clothsim(&[
+        "simulate",
+        "pinned4",
+        "--frames",
+        "1",
+        "--max-memory",
+        "64M",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn a_bad_max_memory_says_what_a_size_is() {
+    for bad in ["12X", "0", "-1G", "lots"] {
+        let o = clothsim(&["simulate", "pinned4", &format!("--max-memory={bad}")]);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {e}");
+        assert!(e.contains("--max-memory") && e.contains(bad), "{bad}: {e}");
+        assert!(
+            e.contains("512M") || e.contains("more than 0 bytes"),
+            "{bad}: {e}"
+        );
+    }
+}

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use super::keys::compute_keys;
 use super::memory::Memory;
-use super::table::{Table, table_size};
+use super::table::{SLOT_BYTES, Table, table_size};
 use super::{PARALLEL_CHUNK, SpatialHash};
 use crate::disjoint::Disjoint;
 use crate::simd::Simd;
@@ -155,6 +155,37 @@ fn place_run(members: &Disjoint<'_, u32>, first: usize, cell_of: &[u32], next: &
 }
 
 impl SpatialHash {
+    /// Bytes the hash allocates for a cloth of `points` points resolved on `threads` threads,
+    /// for a cloth near its rest spacing (as the stretch limit keeps it).
+    ///
+    /// Per point: its keys (this rebuild's and the last), its cell, its place in the two
+    /// member lists, its sorted and anchor positions, and at worst a miss and a move record in
+    /// its run. Per cell: its start, mark, memory, up to four table slots (the table is at
+    /// most half full and doubles) and one count per run. A box is three grid spacings wide
+    /// and long, so it holds about nine points of a cloth at rest; the estimate allows four,
+    /// and twice as many cells as boxes in use (the table is cleared past that), so half a
+    /// cell per point.
+    #[must_use]
+    pub fn memory_estimate(points: usize, threads: usize) -> u64 {
+        let n = points as u64;
+        let runs = threads.clamp(1, points.div_ceil(PARALLEL_CHUNK).max(1)) as u64;
+        let per_point = 2 * size_of::<u64>()
+            + 3 * size_of::<u32>()
+            + 2 * size_of::<Vec3>()
+            + size_of::<u32>()
+            + size_of::<Moved>();
+        let moves = 2 * size_of::<u64>() as u64 * (n / RELAYOUT_SHARE as u64);
+        let cells = n / 2 + 64;
+        // NOTE: `memory` grows with the cells one rebuild at a time, so its capacity may be
+        // twice its length.
+        let per_cell = size_of::<u32>() as u64
+            + size_of::<bool>() as u64
+            + 2 * size_of::<Memory>() as u64
+            + 4 * SLOT_BYTES as u64
+            + size_of::<u32>() as u64 * runs;
+        n * per_point as u64 + moves + cells * per_cell
+    }
+
     /// [`SpatialHash::rebuild`], on `pool`'s threads when there is one and the cloth is big
     /// enough to share: the same boxes, each listing its points in index order.
     pub(crate) fn rebuild_in(

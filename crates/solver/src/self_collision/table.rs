@@ -12,6 +12,9 @@ pub(super) struct Table {
     pub(super) cells: usize,
 }
 
+/// Bytes of one slot of the table.
+pub(super) const SLOT_BYTES: usize = std::mem::size_of::<Slot>();
+
 #[derive(Debug, Clone, Copy)]
 struct Slot {
     key: u64,

@@ -33,6 +33,7 @@ use std::ops::Range;
 
 use cloth_mesh::Vec3;
 
+use super::ConstraintOrder;
 use super::sweep::{DIRECTIONS, Stencil, offsets, valid_columns};
 
 #[cfg(target_arch = "x86_64")]
@@ -90,6 +91,24 @@ struct BandScratch {
 }
 
 impl StretchSweep {
+    /// Bytes the sweep takes for a cloth of `nw` x `nh` points in `order`: the bounds (a byte
+    /// per point) and, for the faithful and parallel orders, each band's copy of its positions,
+    /// its marks and a row of pre-pass words. The colored order sweeps without them.
+    pub(crate) fn bytes_for(nw: usize, nh: usize, order: ConstraintOrder) -> u64 {
+        let n = nw * nh;
+        let bands = match order {
+            ConstraintOrder::Faithful => 1,
+            ConstraintOrder::Parallel => StretchBands::BLOCKS,
+            ConstraintOrder::Colored => return n as u64,
+        };
+        // Each band's window reaches two rows before its own rows.
+        let window = n + bands * 2 * nw;
+        let soa = 3 * size_of::<f64>() * window;
+        let look = window + bands * 2 * BandScratch::margin(nw);
+        let row_marks = bands * nw * size_of::<u64>();
+        (n + soa + look + row_marks) as u64
+    }
+
     /// Bounds and scratch for sweeps of `stencil`'s springs at the stretch `ratio`.
     pub(crate) fn new(stencil: &Stencil, ratio: f64, simd: Simd) -> Self {
         let (nw, nh) = (stencil.nw(), stencil.nh());

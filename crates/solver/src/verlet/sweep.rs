@@ -165,7 +165,24 @@ pub(crate) struct RowScratch {
     stride: usize,
 }
 
+impl RowScratch {
+    /// Bytes one band's row buffers take for rows of `nw` points.
+    pub(crate) fn bytes_for(nw: usize) -> u64 {
+        let stride = ring_stride(nw) as u64;
+        let values = (POS_SLOTS as u64 * 3 + 3 * 6 * 3 + 3) * stride + nw as u64;
+        values * size_of::<f64>() as u64
+    }
+}
+
 impl Stencil {
+    /// Bytes the stencil of a cloth of `points` points with `pins` pins takes: a rest length
+    /// per point and direction, the pin list, and while it is built a flag per point and
+    /// direction.
+    pub(crate) fn bytes_for(points: usize, pins: usize) -> u64 {
+        let per_point = 6 * (size_of::<f64>() + size_of::<bool>());
+        (points * per_point + pins * size_of::<usize>()) as u64
+    }
+
     /// Rearranges `mesh`'s springs by direction.
     ///
     /// # Errors

@@ -275,6 +275,8 @@ pub struct App {
     pub cwd: PathBuf,
     /// The screen recording in progress (R starts and stops it).
     pub recording: Option<super::recording::Recording>,
+    /// `--max-memory`: most bytes a scene opened may need (`None`: the memory available).
+    pub max_memory: Option<u64>,
 }
 
 impl App {
@@ -321,6 +323,7 @@ impl App {
             drag: None,
             quit: false,
             cwd: PathBuf::from("."),
+            max_memory: None,
         }
     }
 

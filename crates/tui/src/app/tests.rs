@@ -15,6 +15,8 @@ use super::model::{Overlay, Then};
 use super::params::PARAMS;
 use super::{App, Args, Message, build_in, input, panes, update, view};
 
+mod keys;
+
 fn app_with(scene: &str, paused: bool) -> App {
     let args = Args {
         scene: scene.to_owned(),

@@ -991,8 +991,13 @@ fn open_scene(app: &mut App, name: &str) {
     }
 }
 
-/// Opens `scene`, asking first when its cloth is big.
+/// Opens `scene`, asking first when its cloth is big; refuses it when it would need more
+/// memory than the app may take.
 fn replace_scene(app: &mut App, scene: cloth_scene::Scene) {
+    if let Err(e) = check_memory(app, &scene) {
+        app.say(Level::Error, format!("{e:#}"));
+        return;
+    }
     let n = scene.mesh.len();
     if n > BIG_CLOTH {
         app.big = Some(Box::new(scene));
@@ -1000,6 +1005,23 @@ fn replace_scene(app: &mut App, scene: cloth_scene::Scene) {
         return;
     }
     start_scene(app, scene);
+}
+
+/// Refuses `scene` when its cloth would need more memory than the app may take (see
+/// [`crate::memory::check`]), with the solver it asks for or else the default one.
+fn check_memory(app: &App, scene: &cloth_scene::Scene) -> anyhow::Result<()> {
+    let registry = app.sim.registry();
+    let (entry, options) = match crate::solvers::choose(registry, scene, None) {
+        Ok(choice) => (choice.entry, choice.options),
+        Err(_) => match registry.default_entry() {
+            Some(entry) => (*entry, serde_json::Value::Null),
+            None => return Ok(()),
+        },
+    };
+    let need = crate::memory::ui_need(&entry, &options, &scene.mesh);
+    let who = crate::memory::solver(&entry);
+    let limit = (app.max_memory, crate::memory::SMALLER_SCENE);
+    crate::memory::check(&scene.origin, &who, &scene.mesh, need, limit)
 }
 
 fn start_scene(app: &mut App, scene: cloth_scene::Scene) {

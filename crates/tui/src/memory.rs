@@ -1,0 +1,257 @@
+//! Memory checked before it is asked for: a run is refused, naming what it needs and the limit,
+//! when its solver's estimate ([`SolverEntry::memory_estimate`]), the cloth and its states and
+//! the frames it draws come to more than `--max-memory`, or by default than the memory the
+//! system has available. A refused run allocates nothing large, so it cannot abort.
+
+use std::fmt::Display;
+
+use cloth_mesh::{ClothMesh, Vec3};
+use cloth_render::{Mode, Renderer};
+use cloth_solver::{SolverEntry, available_memory, human_bytes};
+use serde_json::Value;
+
+/// What `--max-memory` takes, for messages and help.
+const SIZE_FORM: &str = "a number of bytes with an optional K, M, G or T suffix (powers of \
+                         1024), such as 512M, 4G or 1.5G";
+
+/// Parses a size as `--max-memory` takes it: a positive number with an optional K, M, G or T
+/// suffix (powers of 1024, upper or lower case, optionally followed by `B` or `iB`).
+///
+/// # Errors
+/// A message naming the value and what is allowed.
+pub fn parse_size(text: &str) -> Result<u64, String> {
+    let bad = || format!("{text:?} is not a size: it must be {SIZE_FORM}");
+    let t = text.trim();
+    let digits = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (number, unit) = t.split_at(digits);
+    let unit = unit.trim().to_ascii_lowercase();
+    let unit = unit
+        .strip_suffix("ib")
+        .or_else(|| unit.strip_suffix('b'))
+        .unwrap_or(&unit);
+    let scale: u64 = match unit {
+        "" => 1,
+        "k" => 1 << 10,
+        "m" => 1 << 20,
+        "g" => 1 << 30,
+        "t" => 1 << 40,
+        _ => return Err(bad()),
+    };
+    let value: f64 = number.parse().map_err(|_| bad())?;
+    let bytes = (value * scale as f64).round();
+    // NOTE: below 2^64 exactly: `as u64` would saturate a larger value silently.
+    if !(1.0..18_446_744_073_709_551_616.0).contains(&bytes) {
+        return Err(format!(
+            "{text:?} is not a size this machine can have: it must be more than 0 bytes and \
+             less than 16 EiB ({SIZE_FORM})"
+        ));
+    }
+    Ok(bytes as u64)
+}
+
+/// `the NAME solver`, for [`check`]'s messages.
+pub fn solver(entry: &SolverEntry) -> String {
+    format!("the {} solver", entry.name())
+}
+
+/// Bytes a run needs, by what holds them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Need {
+    /// The solver's scratch and caches, as its entry states them.
+    pub solver: u64,
+    /// The mesh and the copies of the cloth's state the run keeps.
+    pub cloth: u64,
+    /// Renderer buffers and frames.
+    pub drawing: u64,
+}
+
+impl Need {
+    /// What a run of `entry` with `options` on `mesh` needs, keeping `states` copies of the
+    /// cloth's state and drawing into `drawing` bytes of buffers (see [`drawing`]).
+    pub fn new(
+        entry: &SolverEntry,
+        options: &Value,
+        mesh: &ClothMesh,
+        states: u64,
+        drawing: u64,
+    ) -> Self {
+        Self {
+            solver: entry.memory_estimate(mesh, options),
+            cloth: mesh_bytes(mesh).saturating_add(states.saturating_mul(state_bytes(mesh))),
+            drawing,
+        }
+    }
+
+    /// The whole.
+    pub fn total(&self) -> u64 {
+        self.solver
+            .saturating_add(self.cloth)
+            .saturating_add(self.drawing)
+    }
+}
+
+/// Bytes of `mesh`'s arrays: start positions, pins, springs and triangles.
+pub fn mesh_bytes(mesh: &ClothMesh) -> u64 {
+    let points = mesh.len() * (size_of::<Vec3>() + size_of::<bool>());
+    let springs = size_of_val(mesh.springs());
+    let triangles = size_of_val(mesh.triangles());
+    (points + springs + triangles) as u64
+}
+
+/// Bytes of one state of `mesh`: its positions and last positions.
+pub fn state_bytes(mesh: &ClothMesh) -> u64 {
+    (2 * mesh.len() * size_of::<Vec3>()) as u64
+}
+
+/// Bytes of `panels` frames of `cells` character cells each, drawn in `mode` from a cloth of
+/// `points` points, by one renderer.
+pub fn drawing(points: usize, panels: usize, cells: usize, mode: Mode) -> u64 {
+    let frames = panels.saturating_mul(cells);
+    // One renderer draws every panel in turn: its buffers are one panel's.
+    Renderer::memory_estimate(points, cells, mode).saturating_add(Renderer::memory_estimate(
+        0,
+        frames,
+        Mode::Ascii,
+    ))
+}
+
+/// Copies of the cloth's state the live UI keeps: the displayed simulation's state and last
+/// good state, the worker's two, and the snapshot the worker hands over.
+const UI_STATES: u64 = 5;
+
+/// Cells of the largest terminal the live UI's estimate allows for: its panes share them.
+const UI_CELLS: usize = 400 * 120;
+
+/// What the live UI needs to run `entry` with `options` on `mesh`.
+pub fn ui_need(entry: &SolverEntry, options: &Value, mesh: &ClothMesh) -> Need {
+    let drawing = drawing(mesh.len(), 1, UI_CELLS, Mode::Braille);
+    Need::new(entry, options, mesh, UI_STATES, drawing)
+}
+
+/// How a scene's cloth is made smaller, for [`check`]'s advice.
+pub const SMALLER_SCENE: &str = "a smaller grid (cloth.num_width_points, cloth.num_height_points)";
+
+/// Refuses the run described by `need` when it exceeds `max` bytes (`--max-memory`), or, when
+/// there is no `max`, the memory the system has available (no check where that is unknown).
+///
+/// # Errors
+/// A message naming `origin`, `who` (`the verlet solver`), the cloth's size, the estimate and
+/// its parts, and the limit, with what to change: `smaller` (see [`SMALLER_SCENE`]) or the
+/// limit.
+pub fn check(
+    origin: impl Display,
+    who: &str,
+    mesh: &ClothMesh,
+    need: Need,
+    (max, smaller): (Option<u64>, &str),
+) -> anyhow::Result<()> {
+    let (limit, what) = match max {
+        Some(max) => (
+            max,
+            format!("the --max-memory limit of {}", human_bytes(max)),
+        ),
+        None => match available_memory() {
+            Some(available) => (
+                available,
+                format!("the {} of memory available", human_bytes(available)),
+            ),
+            None => return Ok(()),
+        },
+    };
+    if need.total() <= limit {
+        return Ok(());
+    }
+    let drawing = if need.drawing > 0 {
+        format!(", {} for drawing", human_bytes(need.drawing))
+    } else {
+        String::new()
+    };
+    let raise = match max {
+        Some(_) => "raise --max-memory",
+        None => "free some memory (--max-memory SIZE sets the limit instead)",
+    };
+    anyhow::bail!(
+        "{origin}: {who} on this {} x {} cloth needs about {} ({} for the solver, {} for the \
+         cloth and its states{drawing}), more than {what}; use {smaller} or {raise}",
+        mesh.nw(),
+        mesh.nh(),
+        human_bytes(need.total()),
+        human_bytes(need.solver),
+        human_bytes(need.cloth),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cloth_solver::Verlet;
+
+    #[test]
+    fn sizes_take_binary_suffixes_and_refuse_anything_else() {
+        assert_eq!(parse_size("512M"), Ok(512 << 20));
+        assert_eq!(parse_size("4G"), Ok(4 << 30));
+        assert_eq!(parse_size("4gib"), Ok(4 << 30));
+        assert_eq!(parse_size("1.5G"), Ok(3 << 29));
+        assert_eq!(parse_size("100kB"), Ok(100 << 10));
+        assert_eq!(parse_size("1000000"), Ok(1_000_000));
+        assert_eq!(parse_size("2T"), Ok(2 << 40));
+        for bad in ["", "M", "12X", "-1G", "1..2M", "1e3", "1G2"] {
+            let e = parse_size(bad).unwrap_err();
+            assert!(e.contains(&format!("{bad:?}")) && e.contains("512M"), "{e}");
+        }
+        for out_of_range in ["0", "0.1", "16777216T"] {
+            let e = parse_size(out_of_range).unwrap_err();
+            assert!(e.contains("more than 0 bytes"), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_run_over_the_limit_is_refused_naming_the_estimate_and_the_limit() {
+        let mesh = cloth_bench::pinned_grid(100).unwrap();
+        let entry = Verlet::ENTRY;
+        let need = Need::new(&entry, &Value::Null, &mesh, 1, 0);
+        assert_eq!(
+            need.solver,
+            Verlet::memory_estimate(&mesh, 1, cloth_solver::ConstraintOrder::Faithful)
+        );
+        assert!(need.total() > 1 << 20);
+        let e = check(
+            "pinned4",
+            &solver(&entry),
+            &mesh,
+            need,
+            (Some(1 << 20), SMALLER_SCENE),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("pinned4: the verlet solver on this 100 x 100 cloth needs about ")
+                && e.contains(&human_bytes(need.total()))
+                && e.contains("the --max-memory limit of 1.0 MiB")
+                && e.contains("cloth.num_width_points"),
+            "{e}"
+        );
+        assert!(
+            check(
+                "pinned4",
+                &solver(&entry),
+                &mesh,
+                need,
+                (Some(need.total()), SMALLER_SCENE)
+            )
+            .is_ok()
+        );
+    }
+
+    #[test]
+    fn the_cloths_bytes_are_its_arrays() {
+        let mesh = cloth_bench::pinned_grid(50).unwrap();
+        assert_eq!(state_bytes(&mesh), 2 * 2500 * 24);
+        let springs = size_of_val(mesh.springs()) as u64;
+        assert_eq!(mesh_bytes(&mesh), 2500 * 25 + springs + 2 * 49 * 49 * 12);
+        // Braille draws eight pixels a cell, ASCII one.
+        assert!(drawing(2500, 1, 80 * 40, Mode::Braille) > drawing(2500, 1, 80 * 40, Mode::Ascii));
+    }
+}
