@@ -32,6 +32,7 @@ mod simulate;
 mod solvers;
 mod state_file;
 mod steal;
+mod study;
 
 use std::ffi::OsString;
 use std::io::{IsTerminal as _, Write as _};
