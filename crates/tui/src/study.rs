@@ -175,6 +175,18 @@ pub fn variants(
     axes: &[Axis],
 ) -> anyhow::Result<Vec<Variant>> {
     check_axes(axes)?;
+    for axis in axes {
+        if let Some(set) = sets
+            .iter()
+            .find(|s| s.split_once('=').is_some_and(|(k, _)| k.trim() == axis.key))
+        {
+            bail!(
+                "--set {set} and --vary {}: the key is varied, so each variant sets it; drop \
+                 the --set",
+                axis.key
+            );
+        }
+    }
     // The first axis varies fastest: it runs across a row of the grid, the second down.
     let mut combos: Vec<Vec<(String, String, String)>> = vec![Vec::new()];
     for axis in axes {
@@ -511,6 +523,12 @@ mod tests {
         assert_eq!(vs[3].file_label(), "ks=5000.density=15");
         let twice = [axes[0].clone(), axes[0].clone()];
         assert!(variants(&registry, "pinned2", &[], None, &twice).is_err());
+        let set = ["cloth.ks=3".to_owned()];
+        let e = variants(&registry, "pinned2", &set, None, &axes)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(e.contains("--set cloth.ks=3 and --vary cloth.ks"), "{e}");
     }
 
     #[test]
