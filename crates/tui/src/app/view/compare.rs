@@ -2,7 +2,6 @@
 //! it stopped) and the table of their figures.
 
 use cloth_render::ColorDepth;
-use cloth_solver::{kinetic_energy, max_stretch_ratio};
 use ratatui::Frame;
 use ratatui::layout::{Constraint, Rect};
 use ratatui::text::{Line, Span};
@@ -96,6 +95,12 @@ pub fn table(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
             .iter()
             .map(|p| p.y)
             .fold(f64::INFINITY, f64::min);
+        // NOTE: the UI's copy of a worker's state has its positions only, so velocities come
+        // from the last frame's sample (taken where the state is whole), not from the copy.
+        let (kinetic, stretch) = sim
+            .history
+            .back()
+            .map_or((f64::NAN, f64::NAN), |s| (s.kinetic, s.stretch));
         let style = if sim.fault.is_some() {
             theme.dim
         } else {
@@ -105,11 +110,8 @@ pub fn table(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
             Cell::from(title.to_owned()),
             Cell::from(format!("{centre:>10.4} m")),
             Cell::from(format!("{lowest:>10.4} m")),
-            Cell::from(format!("{:>8.4}", max_stretch_ratio(mesh, state))),
-            Cell::from(format!(
-                "{:>11.3e} J",
-                kinetic_energy(state, sim.point_mass(), sim.dt())
-            )),
+            Cell::from(format!("{stretch:>8.4}")),
+            Cell::from(format!("{kinetic:>11.3e} J")),
             Cell::from(match &sim.fault {
                 Some(fault) => format!("yes: {}", fault.what),
                 None => "no".to_owned(),
