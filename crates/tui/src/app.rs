@@ -169,6 +169,16 @@ pub fn build_compare_in(
         args.ui.solver.as_deref(),
         &args.vary,
     )?;
+    if args.vary.len() == 2
+        && let Some(a) = args.vary.iter().find(|a| a.values.len() > 3)
+    {
+        anyhow::bail!(
+            "--vary {}: {} values; with two --vary compare shows a grid of up to 3 x 3, so each \
+             takes at most 3 values",
+            a.key,
+            a.values.len()
+        );
+    }
     if variants.len() > MAX_COMPARED {
         anyhow::bail!(
             "--vary gives {} variants; compare shows at most {MAX_COMPARED} (3 x 3): give \

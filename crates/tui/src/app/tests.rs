@@ -943,3 +943,37 @@ fn a_diverging_variant_stops_alone_and_greyed_with_its_reason() {
     let screen = screen(&mut app, 160, 48);
     assert!(screen.contains("stopped at"), "{screen}");
 }
+
+#[test]
+fn two_axes_compare_as_a_grid_of_at_most_three_by_three() {
+    let mut app = compare_with(
+        "pinned2",
+        &["cloth.ks=1000,5000,20000", "cloth.damping=0.2,1"],
+    );
+    let r = super::layout::regions(&app, Rect::new(0, 0, 160, 48)).unwrap();
+    assert_eq!(r.variants.len(), 6);
+    // Three across (the first axis), two down (the second).
+    assert_eq!(r.variants[0].y, r.variants[2].y);
+    assert!(r.variants[3].y > r.variants[0].y);
+    assert_eq!(r.variants[3].x, r.variants[0].x);
+    let screen = screen(&mut app, 160, 48);
+    assert!(screen.contains("ks=20000 damping=1"), "{screen}");
+
+    let args = super::CompareArgs {
+        ui: Args::default(),
+        vary: ["cloth.ks=1,2,3,4", "cloth.damping=0.1,0.2,0.3"]
+            .iter()
+            .map(|v| v.parse().unwrap())
+            .collect(),
+    };
+    let e = super::build_compare_in(
+        &args,
+        &crate::default_registry(),
+        false,
+        &cloth_render::ColorEnv::default(),
+    )
+    .err()
+    .map(|e| e.to_string())
+    .unwrap_or_default();
+    assert!(e.contains("grid of up to 3 x 3"), "{e}");
+}
