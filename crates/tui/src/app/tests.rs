@@ -927,6 +927,12 @@ fn compare_commands_and_shared_edits_reach_every_variant_and_each_keeps_its_own_
     );
     press(&mut app, KeyCode::Char('r'));
     assert!(compared(&app).iter().all(|s| s.frames == 0), "reset, all");
+    press(&mut app, KeyCode::Char('o'));
+    assert_eq!(
+        app.overlay,
+        Overlay::None,
+        "no other scene replaces one variant"
+    );
 }
 
 #[test]

@@ -136,7 +136,10 @@ pub fn update(app: &mut App, msg: Message) {
             app.say(Level::Info, "orbit camera reset");
         }
         Message::OpenPicker => {
-            if app.unsaved() && app.overlay != Overlay::ConfirmDiscard(Then::Open) {
+            if app.unsaved()
+                && app.compare.is_none()
+                && app.overlay != Overlay::ConfirmDiscard(Then::Open)
+            {
                 app.overlay = Overlay::ConfirmDiscard(Then::Open);
             } else {
                 open_picker(app);
@@ -887,6 +890,14 @@ fn save(app: &mut App, path: &std::path::Path) -> anyhow::Result<()> {
 
 /// Opens the scene picker on the scene that is open now.
 fn open_picker(app: &mut App) {
+    if app.compare.is_some() {
+        // The variants are one scene's: another scene is another study.
+        app.say(
+            Level::Warn,
+            "compare shows one scene's variants: quit and run clothsim compare on another scene",
+        );
+        return;
+    }
     let files = json_files(&app.cwd);
     let origin = &app.sim.scene.origin;
     let selected = cloth_scene::BUNDLED
