@@ -8,6 +8,7 @@
 //! clock; the loop in [`runner`] waits on one channel for keys, signals and the worker's
 //! snapshots, answers each at once and draws at most `--fps` times a second.
 
+mod compare;
 mod escape;
 mod input;
 mod keymap;
@@ -172,6 +173,121 @@ pub fn build_in(
         app.cwd = cwd;
     }
     Ok(app)
+}
+
+/// Arguments of `clothsim compare`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct CompareArgs {
+    /// The UI's arguments (the scene, `--set`, `--solver`, `--paused`, ...).
+    #[command(flatten)]
+    pub ui: Args,
+    /// The study: `KEY=V1,V2,...` with 2 to 6 values, the key and values as `--set` takes
+    /// them (including `simulation.solver`); twice for a grid of up to 3 x 3 panes (the first
+    /// key across, the second down).
+    #[arg(long = "vary", value_name = "KEY=V1,V2,...", required = true)]
+    pub vary: Vec<crate::study::Axis>,
+}
+
+/// Most panes compare mode shows.
+pub const MAX_COMPARED: usize = 9;
+
+/// Builds the compare-mode app for `args` (see [`build_in`]): the first variant is the app's
+/// simulation, the others its members.
+///
+/// # Errors
+/// A variant that does not load, more than [`MAX_COMPARED`] variants, or a bad solver.
+pub fn build_compare_in(
+    args: &CompareArgs,
+    registry: &Registry,
+    is_tty: bool,
+    env: &ColorEnv,
+) -> anyhow::Result<App> {
+    let variants = crate::study::variants(
+        registry,
+        &args.ui.scene,
+        &args.ui.sets,
+        args.ui.solver.as_deref(),
+        &args.vary,
+    )?;
+    if args.vary.len() == 2
+        && let Some(a) = args.vary.iter().find(|a| a.values.len() > 3)
+    {
+        anyhow::bail!(
+            "--vary {}: {} values; with two --vary compare shows a grid of up to 3 x 3, so each \
+             takes at most 3 values",
+            a.key,
+            a.values.len()
+        );
+    }
+    if variants.len() > MAX_COMPARED {
+        anyhow::bail!(
+            "--vary gives {} variants; compare shows at most {MAX_COMPARED} (3 x 3): give \
+             fewer values",
+            variants.len()
+        );
+    }
+    let mut app = build_in(&args.ui, registry, is_tty, env)?;
+    let mut variants = variants.into_iter();
+    let Some(first) = variants.next() else {
+        anyhow::bail!("--vary gives no variants");
+    };
+    app.sim = Simulation::new(
+        first.scene,
+        registry.clone(),
+        Some(first.choice.entry.name()),
+    )?;
+    app.saved = (app.sim.settings.clone(), app.sim.entry().name());
+    app.sent = app.saved.clone();
+    let solver_varied = args.vary.iter().any(|a| a.key == "simulation.solver");
+    let mut members = Vec::new();
+    for v in variants {
+        let sim = Simulation::new(v.scene, registry.clone(), Some(v.choice.entry.name()))?;
+        members.push(compare::Member {
+            title: v.title,
+            sent: sim.settings.clone(),
+            sim,
+            worker: None,
+            frame: None,
+            lagging: false,
+        });
+    }
+    app.layout = model::Layout::Single;
+    app.compare = Some(compare::Compare {
+        axes: args
+            .vary
+            .iter()
+            .map(|a| (a.key.clone(), a.values.join(", ")))
+            .collect(),
+        title: first.title,
+        frame: None,
+        members,
+        columns: args.vary[0].values.len().min(3),
+        solver_varied,
+    });
+    Ok(app)
+}
+
+/// Runs compare mode until the user quits.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_compare(args: &CompareArgs, registry: &Registry) -> anyhow::Result<()> {
+    if !std::io::stdout().is_terminal() {
+        anyhow::bail!(
+            "compare needs a terminal, but stdout is not one; to write the variants' frames to \
+             a file or a pipe use `clothsim render SCENE --vary ...` (or `simulate --vary`)"
+        );
+    }
+    let env = ColorEnv::read(|k| std::env::var(k).ok());
+    if env.dumb_terminal() {
+        anyhow::bail!(
+            "compare needs a terminal with cursor addressing; use `clothsim render {} --vary \
+             ...` for plain text",
+            args.ui.scene
+        );
+    }
+    let app = build_compare_in(args, registry, true, &env)?;
+    runner::run(app, args.ui.fps)
 }
 
 /// Runs the live UI until the user quits.

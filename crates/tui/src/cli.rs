@@ -30,6 +30,7 @@ Examples:
   clothsim simulate sphere --set cloth.ks=20000 --out drape.obj
   clothsim simulate sphere --every 3 --out drape.pc2 --stats drape.csv
   clothsim render sphere --every 3 --format cast > sphere.cast
+  clothsim compare pinned4 --vary cloth.ks=1,5000,100000
   clothsim bench --grid 50 --grid 128
   clothsim completions bash > ~/.local/share/bash-completion/completions/clothsim";
 
@@ -52,6 +53,9 @@ pub struct Cli {
 enum Command {
     /// The live terminal UI (the default): watch the cloth and edit it while it moves.
     Tui(app::Args),
+    /// The live UI on a parameter study: one pane per variant (`--vary KEY=V1,V2,...`),
+    /// stepping together, with a table of their figures.
+    Compare(app::CompareArgs),
     /// Run a scene headless and write the final state (JSON, or OBJ for a `.obj` file).
     Simulate(simulate::Args),
     /// Run a scene headless and print frames as text (plain, or ANSI colour).
@@ -88,6 +92,7 @@ impl Cli {
     pub fn run(self, registry: &Registry) -> anyhow::Result<()> {
         match self.command {
             Some(Command::Tui(args)) => app::run(&args, registry),
+            Some(Command::Compare(args)) => app::run_compare(&args, registry),
             Some(Command::Simulate(args)) => simulate::run(&args, registry),
             Some(Command::Render(args)) => render::run(&args, registry),
             Some(Command::Bench(args)) => bench::run(&args, registry),
@@ -259,7 +264,7 @@ fn completions(registry: &Registry, shell: Shell) -> Vec<u8> {
         }
         Shell::Fish => {
             let mut text = text;
-            let takes_scene = "__fish_seen_subcommand_from tui simulate render";
+            let takes_scene = "__fish_seen_subcommand_from tui compare simulate render";
             let _ = write!(
                 text,
                 "\n# Bundled scenes and scene files where a scene is expected.\n\
@@ -593,16 +598,16 @@ mod tests {
             .filter(|l| l.trim().starts_with("opts=") && l.contains(" pinned4 "))
             .count();
         assert_eq!(
-            with_scenes, 4,
-            "top level, tui, simulate and render:\n{bash}"
+            with_scenes, 5,
+            "top level, tui, compare, simulate and render:\n{bash}"
         );
         let zsh = String::from_utf8(completions(&solvers::default_registry(), Shell::Zsh))
             .expect("UTF-8");
         assert!(zsh.contains("_files -g"), "zsh offers scene files too");
         assert_eq!(
             zsh.matches(":_clothsim_scenes'").count(),
-            4,
-            "the scene of the top level, tui, simulate and render:\n{zsh}"
+            5,
+            "the scene of the top level, tui, compare, simulate and render:\n{zsh}"
         );
     }
 

@@ -1,6 +1,6 @@
 //! `clothsim`, the CS184 mass-spring cloth in the terminal, as a library: the whole application
-//! (command line, live UI, `simulate`, `render`, `bench`, `scenes`, `solvers`) runs with any
-//! [`Registry`] of solvers.
+//! (command line, live UI, `compare`, `simulate`, `render`, `bench`, `scenes`, `solvers`) runs
+//! with any [`Registry`] of solvers.
 //!
 //! The `clothsim` binary is [`run`] with [`default_registry`]. A solver crate written elsewhere
 //! builds its own clothsim by adding its entry:
@@ -34,6 +34,7 @@ mod simulate;
 mod solvers;
 mod state_file;
 mod steal;
+mod study;
 
 use std::ffi::OsString;
 use std::io::{IsTerminal as _, Write as _};

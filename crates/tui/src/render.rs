@@ -20,7 +20,7 @@ use crate::memory::{self, Need};
 use crate::output::Stdout;
 use crate::progress::{Progress, When};
 use crate::state_file::StateFile;
-use crate::{export, headless, solvers};
+use crate::{export, headless, solvers, study};
 
 /// Columns between the panels of `--view all`.
 const GAP: &str = " | ";
@@ -131,6 +131,12 @@ pub struct Args {
     /// memory the system has available.
     #[arg(long, value_name = "SIZE", value_parser = crate::memory::parse_size)]
     max_memory: Option<u64>,
+    /// Render one variant per value of a scene key next to each other, titled, at the same
+    /// frames and with one fixed extent: `KEY=V1,V2,...` with 2 to 6 values, the key and
+    /// values as `--set` takes them (including `simulation.solver`); twice for a grid (the
+    /// first key across, the second down). Takes one view.
+    #[arg(long = "vary", value_name = "KEY=V1,V2,...")]
+    vary: Vec<crate::study::Axis>,
 }
 
 /// Whether frame `f` (1-based; 0 is the start) of `frames` is printed.
@@ -167,6 +173,9 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             }
         }
     };
+    if !args.vary.is_empty() {
+        return run_study(args, registry, depth);
+    }
     let mut scene = cloth_scene::load(&args.scene, &args.sets)?;
     let choice = solvers::prepare(registry, &mut scene, args.solver.as_deref(), &args.flags)?;
     let views = args.view.views();
@@ -242,7 +251,11 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         if views.len() == 1 {
             panels[0].write_ansi(&mut text, depth)?;
         } else {
-            side_by_side(&views, &panels, args.size, depth, &mut text)?;
+            let labels: Vec<String> = views
+                .iter()
+                .map(|v| v.describe().chars().take(args.size.width).collect())
+                .collect();
+            side_by_side_titled(&labels, &panels, args.size, depth, &mut text)?;
         }
         if cast {
             text = export::cast_frame(f as f64 / fps, &text, first);
@@ -255,6 +268,169 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     })?;
     out.finish()?;
     diverged_error(&scene, &choice.entry, args, diverged)
+}
+
+/// `render --vary`: the variants stepped in lockstep, each printed frame a grid of panels (the
+/// first axis across, the second down), each titled with its values, all fitted to one extent.
+fn run_study(args: &Args, registry: &Registry, depth: ColorDepth) -> anyhow::Result<()> {
+    let ViewArg::One(view) = args.view else {
+        anyhow::bail!(
+            "--view all shows three views of one run; with --vary choose one view (side, top, \
+             bottom, front or orbit)"
+        );
+    };
+    let variants = study::variants(
+        registry,
+        &args.scene,
+        &args.sets,
+        args.solver.as_deref(),
+        &args.vary,
+    )?;
+    let columns = args.vary[0].values.len();
+    let mut starts = Vec::with_capacity(variants.len());
+    for v in &variants {
+        starts.push(match &args.from {
+            Some(path) => StateFile::read(path, &v.scene.mesh, v.scene.params.dt())?.1,
+            None => ClothState::new(&v.scene.mesh),
+        });
+    }
+    let mut runs = Vec::with_capacity(variants.len());
+    for (v, start) in variants.iter().zip(&starts) {
+        runs.push(study::Run::new(v, Some(start))?);
+    }
+    headless::note_shadowing(&args.scene);
+    // One extent for every variant and frame, so the shapes compare honestly: where any
+    // variant can go (see `predicted_extent`), grown should one of them go further.
+    let mut extent = if printed_count(args.frames, args.every) > 1 {
+        let mut all: Option<Bounds> = None;
+        for (v, start) in variants.iter().zip(&starts) {
+            let e = predicted_extent(&v.scene, start, args.frames)?;
+            all = Some(all.map_or(e, |a| a.union(&e)));
+        }
+        all
+    } else {
+        None
+    };
+    let options = RenderOptions {
+        mode: args.mode,
+        color: depth != ColorDepth::None,
+        ..RenderOptions::default()
+    };
+    let mut renderer = Renderer::new();
+    let mut panels: Vec<AsciiFrame> = runs.iter().map(|_| AsciiFrame::new(args.size)).collect();
+    let mut text = String::new();
+    let mut out = Stdout::new();
+    let steps = variants
+        .iter()
+        .map(|v| u64::from(v.scene.params.steps_per_frame))
+        .sum::<u64>();
+    let label = format!("{} ({} variants)", variants[0].scene.origin, variants.len());
+    let mut progress = Progress::new(
+        args.progress,
+        &label,
+        args.frames,
+        steps as u32,
+        Stdout::is_terminal(),
+    );
+    let threads = study::threads_for(runs.len());
+    let mut draw = |runs: &[study::Run<'_>], text: &mut String| -> anyhow::Result<()> {
+        let mut fitted = extent;
+        for run in runs {
+            let now = Bounds::of_scene(&run.state.positions, &run.variant.scene.colliders)?;
+            fitted = Some(fitted.map_or(now, |e| e.union(&now)));
+        }
+        let Some(fitted) = fitted else {
+            return Ok(());
+        };
+        if extent.is_some() {
+            extent = Some(fitted);
+        }
+        for (run, panel) in runs.iter().zip(panels.iter_mut()) {
+            let scene = &run.variant.scene;
+            let spec = ViewSpec {
+                extent: Extent::Fixed(fitted),
+                ..ViewSpec::new(view, &scene.mesh)
+            };
+            renderer.render(
+                &scene.mesh,
+                &run.state,
+                &scene.colliders,
+                &spec,
+                &options,
+                panel,
+            )?;
+        }
+        let titles: Vec<String> = runs
+            .iter()
+            .map(|r| match (&r.diverged, &r.failed) {
+                (Some((f, _)), _) => format!("{} (diverged at frame {f})", r.variant.title),
+                (None, Some(_)) => format!("{} (failed)", r.variant.title),
+                (None, None) => r.variant.title.clone(),
+            })
+            .collect();
+        grid(&titles, &panels, columns, args.size, depth, text)
+    };
+    let result = (|| -> anyhow::Result<()> {
+        let mut first = true;
+        if printed(0, args.frames, args.every) {
+            text.clear();
+            draw(&runs, &mut text)?;
+            out.write_all_or_fail(text.as_bytes())?;
+            out.flush_or_fail()?;
+            first = false;
+        }
+        for f in 1..=args.frames {
+            study::advance_all(&mut runs, f, args.frames, threads, &mut progress);
+            if printed(f, args.frames, args.every) {
+                text.clear();
+                if !first {
+                    text.push_str("\x0c\n");
+                }
+                first = false;
+                draw(&runs, &mut text)?;
+                out.write_all_or_fail(text.as_bytes())?;
+                out.flush_or_fail()?;
+            }
+        }
+        Ok(())
+    })();
+    progress.finish();
+    result?;
+    out.finish()?;
+    let stopped: Vec<String> = runs
+        .iter()
+        .filter_map(|r| r.reason().map(|why| format!("{}: {why}", r.variant.title)))
+        .collect();
+    if !stopped.is_empty() {
+        anyhow::bail!(
+            "{}: {} of {} variants stopped (their panels show the last good frame):\n  {}",
+            variants[0].scene.origin,
+            stopped.len(),
+            variants.len(),
+            stopped.join("\n  ")
+        );
+    }
+    Ok(())
+}
+
+/// Writes `panels` as a grid of `columns` across, each row of panels under a line of their
+/// `titles`.
+fn grid(
+    titles: &[String],
+    panels: &[AsciiFrame],
+    columns: usize,
+    size: FrameSize,
+    depth: ColorDepth,
+    out: &mut String,
+) -> anyhow::Result<()> {
+    for (row_titles, row) in titles.chunks(columns).zip(panels.chunks(columns)) {
+        let labels: Vec<String> = row_titles
+            .iter()
+            .map(|t| t.chars().take(size.width).collect())
+            .collect();
+        side_by_side_titled(&labels, row, size, depth, out)?;
+    }
+    Ok(())
 }
 
 /// Where the scene can take the cloth in `frames` frames, as the box the views are fitted to.
@@ -402,19 +578,19 @@ fn simulate(
     result
 }
 
-/// Writes the panels next to each other under a label line naming each view and its axes.
-fn side_by_side(
-    views: &[View],
+/// Writes the panels next to each other under a line of their `labels` (each at most a
+/// panel wide).
+fn side_by_side_titled(
+    labels: &[String],
     panels: &[AsciiFrame],
     size: FrameSize,
     depth: ColorDepth,
     out: &mut String,
 ) -> anyhow::Result<()> {
-    for (i, view) in views.iter().enumerate() {
+    for (i, label) in labels.iter().enumerate() {
         if i > 0 {
             out.push_str(GAP);
         }
-        let label: String = view.describe().chars().take(size.width).collect();
         let _ = write!(out, "{label:<w$}", w = size.width);
     }
     out.push('\n');

@@ -11,7 +11,7 @@ use crate::guard::Guard;
 use crate::memory::{self, Need};
 use crate::progress::{Progress, When};
 use crate::state_file::StateFile;
-use crate::{export, headless, output, solvers};
+use crate::{export, headless, output, solvers, study};
 
 /// Arguments of `clothsim simulate`.
 #[derive(Debug, clap::Args)]
@@ -62,8 +62,19 @@ pub struct Args {
     /// memory the system has available.
     #[arg(long, value_name = "SIZE", value_parser = crate::memory::parse_size)]
     max_memory: Option<u64>,
+    /// Run one variant per value of a scene key, side by side: `KEY=V1,V2,...` with 2 to 6
+    /// values, the key and values as `--set` takes them (including `simulation.solver`);
+    /// twice for a grid. Writes one output per variant beside `--out` (`rest.json` gives
+    /// `rest.ks=1.json`, ...) and prints a summary table.
+    #[arg(long = "vary", value_name = "KEY=V1,V2,...")]
+    vary: Vec<crate::study::Axis>,
+    /// With `--vary`, print the summary as JSON: a list of objects with the keys `variant`,
+    /// `centre_height`, `lowest_height`, `max_stretch`, `kinetic_energy` and `diverged`.
+    #[arg(long, requires = "vary")]
+    json: bool,
 }
 
+#[derive(Clone)]
 enum Format {
     Json,
     Obj,
@@ -98,6 +109,15 @@ fn format_of(out: Option<&std::path::Path>) -> anyhow::Result<Format> {
 pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     // Decide the output format before spending time simulating.
     let format = format_of(args.out.as_deref())?;
+    if !args.vary.is_empty() {
+        if matches!(format, Format::Animation(_)) || args.every.is_some() || args.stats.is_some() {
+            anyhow::bail!(
+                "--vary writes each variant's final state (--out a .json or .obj file); it does \
+                 not take an animation --out, --every or --stats"
+            );
+        }
+        return run_study(args, registry, format);
+    }
     if args.every.is_some() && !matches!(format, Format::Animation(_)) {
         anyhow::bail!(
             "--every applies to an animation: give --out a .pc2 or .mdd file or a pattern such \
@@ -291,6 +311,149 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         out.write_all_or_fail(&bytes)?;
         out.finish()
     }
+}
+
+/// `simulate --vary`: every variant in lockstep, one output per variant beside `--out`, the
+/// summary on stdout; an error naming the variants that stopped, after the others are written.
+fn run_study(args: &Args, registry: &Registry, format: Format) -> anyhow::Result<()> {
+    let variants = study::variants(
+        registry,
+        &args.scene,
+        &args.sets,
+        args.solver.as_deref(),
+        &args.vary,
+    )?;
+    let outs: Vec<PathBuf> = match &args.out {
+        Some(path) => variants
+            .iter()
+            .map(|v| variant_name(path, &v.file_label()))
+            .collect(),
+        None => Vec::new(),
+    };
+    for path in &outs {
+        output::check_target(path)?;
+    }
+    if !outs.is_empty() {
+        output::cleanup_on_signals()?;
+    }
+    headless::note_shadowing(&args.scene);
+    let mut starts = Vec::with_capacity(variants.len());
+    for v in &variants {
+        starts.push(match &args.from {
+            Some(path) => {
+                let (file, state) = StateFile::read(path, &v.scene.mesh, v.scene.params.dt())?;
+                (file.frames, file.time, Some(state))
+            }
+            None => (0, 0.0, None),
+        });
+    }
+    let mut runs = Vec::with_capacity(variants.len());
+    for (v, (_, _, start)) in variants.iter().zip(&starts) {
+        runs.push(study::Run::new(v, start.as_ref())?);
+    }
+    let steps = variants
+        .iter()
+        .map(|v| u64::from(v.scene.params.steps_per_frame))
+        .sum::<u64>();
+    let label = format!("{} ({} variants)", variants[0].scene.origin, variants.len());
+    let mut progress = Progress::new(args.progress, &label, args.frames, steps as u32, false);
+    let threads = study::threads_for(runs.len());
+    for frame in 1..=args.frames {
+        study::advance_all(&mut runs, frame, args.frames, threads, &mut progress);
+        if runs.iter().all(study::Run::stopped) {
+            break;
+        }
+    }
+    progress.finish();
+
+    let mut notes = Vec::new();
+    // Without --out, only the summary is printed.
+    for ((run, (start_frames, start_time, _)), path) in runs.iter().zip(&starts).zip(&outs) {
+        let scene = &run.variant.scene;
+        let bytes = match &format {
+            Format::Json => {
+                let mut fs = StateFile::new(
+                    &scene.mesh,
+                    &run.state,
+                    start_frames.saturating_add(run.frames),
+                    start_time + run.frames as f64 / scene.params.frames_per_sec,
+                    scene.params.dt(),
+                );
+                fs.diverged = run.stopped();
+                let mut s = serde_json::to_string(&fs)?;
+                s.push('\n');
+                s.into_bytes()
+            }
+            Format::Obj => export::obj(
+                &scene.mesh,
+                &run.state.positions,
+                &format!("{} after {} frames", scene.origin, run.frames),
+            )
+            .into_bytes(),
+            // Refused before the run.
+            Format::Animation(_) => Vec::new(),
+        };
+        let path = if run.stopped() {
+            diverged_name(path)
+        } else {
+            path.clone()
+        };
+        let written = output::write_atomic(&path, &bytes)?;
+        if let Some(note) = written.note() {
+            notes.push(note.to_owned());
+        }
+    }
+    for note in notes {
+        // Nowhere else to say it; a lost note does not change the result.
+        let _ = writeln!(std::io::stderr(), "clothsim: note: {note}");
+    }
+
+    let summaries: Vec<study::Summary> = runs.iter().map(study::Run::summary).collect();
+    let text = if args.json {
+        let mut s = serde_json::to_string_pretty(&study::json(&variants, &summaries))?;
+        s.push('\n');
+        s
+    } else {
+        study::table(&variants, &summaries)
+    };
+    let mut out = output::Stdout::new();
+    out.write_all_or_fail(text.as_bytes())?;
+    out.finish()?;
+
+    let stopped: Vec<String> = runs
+        .iter()
+        .filter_map(|r| r.reason().map(|why| format!("{}: {why}", r.variant.title)))
+        .collect();
+    if !stopped.is_empty() {
+        let kept = if outs.is_empty() {
+            String::new()
+        } else {
+            " (the states they reached are kept as FILE.diverged)".to_owned()
+        };
+        anyhow::bail!(
+            "{}: {} of {} variants stopped{kept}:\n  {}",
+            variants[0].scene.origin,
+            stopped.len(),
+            variants.len(),
+            stopped.join("\n  ")
+        );
+    }
+    Ok(())
+}
+
+/// `rest.json` and the variant `ks=1` -> `rest.ks=1.json`.
+fn variant_name(path: &std::path::Path, label: &str) -> PathBuf {
+    let mut name = path.file_stem().map_or_else(
+        || std::ffi::OsString::from("state"),
+        std::ffi::OsStr::to_os_string,
+    );
+    name.push(".");
+    name.push(label);
+    if let Some(ext) = path.extension() {
+        name.push(".");
+        name.push(ext);
+    }
+    path.with_file_name(name)
 }
 
 /// `out.json` -> `out.diverged.json`: where a diverged run's state is kept.

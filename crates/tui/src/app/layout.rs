@@ -26,6 +26,11 @@ pub struct Regions {
     pub note: Rect,
     /// The key footer.
     pub footer: Rect,
+    /// Compare mode: one pane per variant, in the study's order (empty otherwise; `panes` is
+    /// then empty).
+    pub variants: Vec<Rect>,
+    /// Compare mode: the table of the variants' figures under their panes.
+    pub table: Rect,
 }
 
 /// The regions for `area`, or `None` when it is smaller than [`MIN_WIDTH`] x [`MIN_HEIGHT`].
@@ -86,6 +91,31 @@ pub fn regions(app: &App, area: Rect) -> Option<Regions> {
         }
     }
 
+    if let Some(c) = &app.compare {
+        let n = c.len();
+        let columns = c.columns.clamp(1, n);
+        let rows = n.div_ceil(columns);
+        let table_h = (n as u16 + 3).min(views.height / 2);
+        let r = Split::vertical([Constraint::Min(1), Constraint::Length(table_h)]).split(views);
+        let row_rects = Split::vertical(vec![Constraint::Ratio(1, rows as u32); rows]).split(r[0]);
+        let mut variants = Vec::with_capacity(n);
+        for row_rect in row_rects.iter() {
+            let cells = Split::horizontal(vec![Constraint::Ratio(1, columns as u32); columns])
+                .split(*row_rect);
+            variants.extend(cells.iter().copied());
+        }
+        variants.truncate(n);
+        return Some(Regions {
+            title,
+            panes: Vec::new(),
+            params,
+            plots,
+            note,
+            footer,
+            variants,
+            table: r[1],
+        });
+    }
     let slots = app.visible_slots();
     let rects: Vec<Rect> = match slots.len() {
         1 => vec![views],
@@ -116,6 +146,8 @@ pub fn regions(app: &App, area: Rect) -> Option<Regions> {
         plots,
         note,
         footer,
+        variants: Vec::new(),
+        table: Rect::default(),
     })
 }
 

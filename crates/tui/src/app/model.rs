@@ -277,6 +277,8 @@ pub struct App {
     pub recording: Option<super::recording::Recording>,
     /// `--max-memory`: most bytes a scene opened may need (`None`: the memory available).
     pub max_memory: Option<u64>,
+    /// Compare mode: the other variants of a study (`None`: one cloth).
+    pub compare: Option<super::compare::Compare>,
 }
 
 impl App {
@@ -324,6 +326,7 @@ impl App {
             quit: false,
             cwd: PathBuf::from("."),
             max_memory: None,
+            compare: None,
         }
     }
 
@@ -335,6 +338,7 @@ impl App {
     /// Tells the simulation's stepper: the worker when there is one, else the simulation
     /// itself at once (whose errors are returned).
     pub fn send(&mut self, command: Command) -> Result<(), String> {
+        self.send_members(&command);
         match &self.worker {
             Some(w) => {
                 w.send(command);
@@ -368,6 +372,24 @@ impl App {
             Box::new(move || n()),
         )?);
         self.sent = (self.sim.settings.clone(), self.sim.entry().name());
+        if let Some(c) = &mut self.compare {
+            for m in &mut c.members {
+                let mut sim = Simulation::new(
+                    m.sim.scene.clone(),
+                    m.sim.registry().clone(),
+                    Some(m.sim.entry().name()),
+                )?;
+                sim.settings.clone_from(&m.sim.settings);
+                sim.apply_options()?;
+                let n = std::sync::Arc::clone(&notify);
+                m.worker = Some(Worker::spawn(
+                    sim,
+                    self.running,
+                    RATES[self.rate],
+                    Box::new(move || n()),
+                )?);
+            }
+        }
         self.notify = Some(notify);
         Ok(())
     }
@@ -382,6 +404,7 @@ impl App {
 
     /// Sends the worker the live settings and solver if they changed since last sent.
     pub fn sync(&mut self) {
+        self.sync_members();
         let Some(w) = &self.worker else {
             return;
         };

@@ -87,6 +87,10 @@ pub fn prepare(app: &mut App, area: Rect) {
     let Some(regions) = layout::regions(app, area) else {
         return;
     };
+    if app.compare.is_some() {
+        prepare_compare(app, &regions.variants);
+        return;
+    }
     if let Some(d) = &mut app.display {
         d.update(&app.sim.state.positions);
     }
@@ -130,6 +134,61 @@ pub fn prepare(app: &mut App, area: Rect) {
         {
             app.frames[slot] = None;
             errors.push(format!("cannot draw pane {}: {e}", slot + 1));
+        }
+    }
+    for e in errors {
+        app.say(Level::Error, e);
+    }
+}
+
+/// Compare mode: renders every variant into its pane with the focused pane's view, all fitted
+/// to one extent (the union over the variants and the run), so their shapes compare honestly.
+fn prepare_compare(app: &mut App, rects: &[Rect]) {
+    let Some(c) = &mut app.compare else {
+        return;
+    };
+    let sims = std::iter::once(&app.sim).chain(c.members.iter().map(|m| &m.sim));
+    for sim in sims {
+        if let Ok(b) = Bounds::of_scene(&sim.state.positions, &sim.settings.colliders) {
+            app.extent = Some(app.extent.map_or(b, |e| e.union(&b)));
+        }
+    }
+    let options = RenderOptions {
+        mode: app.mode,
+        color: app.color,
+        ..RenderOptions::default()
+    };
+    let view = app.views[app.focus];
+    let mut errors = Vec::new();
+    let frames = std::iter::once((&app.sim, &mut c.frame))
+        .chain(c.members.iter_mut().map(|m| (&m.sim, &mut m.frame)));
+    for (i, ((sim, slot), rect)) in frames.zip(rects).enumerate() {
+        let inside = inner(*rect);
+        let Ok(size) = FrameSize::new(inside.width as usize, inside.height as usize) else {
+            *slot = None;
+            continue;
+        };
+        let mut spec = ViewSpec::new(view, &sim.scene.mesh);
+        spec.orbit = app.orbit;
+        if view != View::Orbit
+            && let Some(e) = app.extent
+        {
+            spec.extent = Extent::Fixed(e);
+        }
+        let frame = slot.get_or_insert_with(|| AsciiFrame::new(size));
+        if frame.size() != size {
+            frame.resize(size);
+        }
+        if let Err(e) = app.renderer.render(
+            &sim.scene.mesh,
+            &sim.state,
+            &sim.settings.colliders,
+            &spec,
+            &options,
+            frame,
+        ) {
+            *slot = None;
+            errors.push(format!("cannot draw variant {}: {e}", i + 1));
         }
     }
     for e in errors {

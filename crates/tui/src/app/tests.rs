@@ -1106,3 +1106,144 @@ fn switching_solver_takes_its_steps_unless_they_were_edited_or_given() {
     assert_eq!(app.sim.settings.params.steps_per_frame, 1);
     assert_eq!(app.sim.scene_settings().params.steps_per_frame, 1);
 }
+
+fn compare_with(scene: &str, vary: &[&str]) -> App {
+    let args = super::CompareArgs {
+        ui: Args {
+            scene: scene.to_owned(),
+            ..Args::default()
+        },
+        vary: vary.iter().map(|v| v.parse().unwrap()).collect(),
+    };
+    let mut app = super::build_compare_in(
+        &args,
+        &crate::default_registry(),
+        false,
+        &cloth_render::ColorEnv::default(),
+    )
+    .unwrap();
+    app.cwd = PathBuf::from("/nonexistent");
+    app
+}
+
+/// Every variant's simulation, the first (the app's) first.
+fn compared(app: &App) -> Vec<&super::sim::Simulation> {
+    let c = app.compare.as_ref().expect("compare mode");
+    std::iter::once(&app.sim)
+        .chain(c.members.iter().map(|m| &m.sim))
+        .collect()
+}
+
+#[test]
+fn snapshot_compare_three_stiffnesses() {
+    let mut app = compare_with("pinned4", &["cloth.ks=1,5000,100000"]);
+    update(&mut app, Message::Tick(Duration::from_secs_f64(0.3)));
+    update::run_owed(&mut app, &mut || true);
+    let sims = compared(&app);
+    assert_eq!(sims.len(), 3);
+    // In lockstep: the same simulated time for each.
+    assert!(sims.iter().all(|s| s.steps == sims[0].steps && s.steps > 0));
+    let screen = screen(&mut app, 160, 48);
+    for needle in [
+        "ks=1 ",
+        "ks=5000",
+        "ks=100000",
+        "centre height",
+        "1,5000,100000",
+    ] {
+        assert!(screen.contains(needle), "{needle} in:\n{screen}");
+    }
+    insta::assert_snapshot!("compare_ks_160x48", screen);
+}
+
+#[test]
+fn compare_commands_and_shared_edits_reach_every_variant_and_each_keeps_its_own_value() {
+    let mut app = compare_with("pinned4", &["cloth.ks=1000,5000,20000"]);
+    press(&mut app, KeyCode::Char(' '));
+    assert!(!app.running, "paused");
+    press(&mut app, KeyCode::Char('n'));
+    assert!(
+        compared(&app).iter().all(|s| s.frames == 1),
+        "one frame each"
+    );
+    select(&mut app, "damping");
+    press(&mut app, KeyCode::Char('l'));
+    // The loop passes edits on after each message, as here.
+    app.sync();
+    let damping = app.sim.settings.params.damping;
+    assert_ne!(damping, 0.2, "the edit took");
+    let ks: Vec<f64> = compared(&app)
+        .iter()
+        .map(|s| s.settings.params.ks)
+        .collect();
+    assert_eq!(ks, [1000.0, 5000.0, 20000.0], "each keeps its own ks");
+    assert!(
+        compared(&app)
+            .iter()
+            .all(|s| s.settings.params.damping == damping),
+        "the damping edit reached every variant"
+    );
+    select(&mut app, "ks");
+    press(&mut app, KeyCode::Char('l'));
+    assert_eq!(
+        app.sim.settings.params.ks, 1000.0,
+        "the varied key is not edited"
+    );
+    press(&mut app, KeyCode::Char('r'));
+    assert!(compared(&app).iter().all(|s| s.frames == 0), "reset, all");
+    press(&mut app, KeyCode::Char('o'));
+    assert_eq!(
+        app.overlay,
+        Overlay::None,
+        "no other scene replaces one variant"
+    );
+}
+
+#[test]
+fn a_diverging_variant_stops_alone_and_greyed_with_its_reason() {
+    // Density 1 g/cm^2 is past Verlet's stability limit at ks = 5000 N/m; 150 is the course's.
+    let mut app = compare_with("pinned4", &["cloth.density=0.1,15"]);
+    update(&mut app, Message::Tick(Duration::from_secs_f64(0.3)));
+    update::run_owed(&mut app, &mut || true);
+    let sims = compared(&app);
+    assert!(sims[0].fault.is_some(), "the light cloth blew up");
+    assert!(sims[1].fault.is_none(), "the other goes on");
+    assert!(sims[1].frames > sims[0].frames, "and is further on");
+    assert_eq!(app.overlay, Overlay::None, "no box stops the others");
+    let screen = screen(&mut app, 160, 48);
+    assert!(screen.contains("stopped at"), "{screen}");
+}
+
+#[test]
+fn two_axes_compare_as_a_grid_of_at_most_three_by_three() {
+    let mut app = compare_with(
+        "pinned2",
+        &["cloth.ks=1000,5000,20000", "cloth.damping=0.2,1"],
+    );
+    let r = super::layout::regions(&app, Rect::new(0, 0, 160, 48)).unwrap();
+    assert_eq!(r.variants.len(), 6);
+    // Three across (the first axis), two down (the second).
+    assert_eq!(r.variants[0].y, r.variants[2].y);
+    assert!(r.variants[3].y > r.variants[0].y);
+    assert_eq!(r.variants[3].x, r.variants[0].x);
+    let screen = screen(&mut app, 160, 48);
+    assert!(screen.contains("ks=20000 damping=1"), "{screen}");
+
+    let args = super::CompareArgs {
+        ui: Args::default(),
+        vary: ["cloth.ks=1,2,3,4", "cloth.damping=0.1,0.2,0.3"]
+            .iter()
+            .map(|v| v.parse().unwrap())
+            .collect(),
+    };
+    let e = super::build_compare_in(
+        &args,
+        &crate::default_registry(),
+        false,
+        &cloth_render::ColorEnv::default(),
+    )
+    .err()
+    .map(|e| e.to_string())
+    .unwrap_or_default();
+    assert!(e.contains("grid of up to 3 x 3"), "{e}");
+}

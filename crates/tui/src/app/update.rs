@@ -136,7 +136,10 @@ pub fn update(app: &mut App, msg: Message) {
             app.say(Level::Info, "orbit camera reset");
         }
         Message::OpenPicker => {
-            if app.unsaved() && app.overlay != Overlay::ConfirmDiscard(Then::Open) {
+            if app.unsaved()
+                && app.compare.is_none()
+                && app.overlay != Overlay::ConfirmDiscard(Then::Open)
+            {
                 app.overlay = Overlay::ConfirmDiscard(Then::Open);
             } else {
                 open_picker(app);
@@ -290,7 +293,8 @@ pub fn run_owed(app: &mut App, more: &mut dyn FnMut() -> bool) -> u64 {
     while app.running && app.debt >= app.sim.dt() && more() {
         app.debt -= app.sim.dt();
         n += 1;
-        if app.sim.step().is_err() {
+        app.step_members_inline(1);
+        if app.sim.step().is_err() && app.compare.is_none() {
             stopped(app);
             break;
         }
@@ -312,8 +316,16 @@ pub fn hint_order(app: &mut App) {
     }
 }
 
-/// The simulation failed: pause and explain.
+/// The simulation failed: pause and explain. In compare mode the first variant stops alone,
+/// greyed with its reason, as the others do: the rest go on.
 fn stopped(app: &mut App) {
+    if app.compare.is_some() {
+        if let Some(f) = &app.sim.fault {
+            let text = format!("the first variant stopped: {}; r resets all", f.what);
+            app.say(Level::Warn, text);
+        }
+        return;
+    }
     app.running = false;
     app.debt = 0.0;
     app.overlay = Overlay::Fault;
@@ -392,6 +404,7 @@ fn step_frame(app: &mut App) {
         app.step_note = true;
         return;
     }
+    app.send_members(&Command::StepFrame);
     if app.sim.step_frame().is_err() {
         stopped(app);
     } else {
@@ -412,13 +425,18 @@ pub fn say_frame(app: &mut App) {
 
 /// Takes in what the worker published: the cloth, its clock and any stop.
 pub fn adopt(app: &mut App) -> bool {
+    let members = app.adopt_members();
     let Some(w) = &app.worker else {
-        return false;
+        return members;
     };
     let Some(got) = w.adopt_into(&mut app.sim) else {
-        return false;
+        return members;
     };
     app.stats.rates = got.rates;
+    if let Some(c) = &app.compare {
+        // The status says "lagging" when any variant cannot keep real time.
+        app.stats.rates.lagging |= c.members.iter().any(|m| m.lagging);
+    }
     for e in got.errors {
         app.say(Level::Error, e);
     }
@@ -443,6 +461,8 @@ pub fn adopt(app: &mut App) -> bool {
 fn reset(app: &mut App) {
     if app.worker.is_some() {
         let _ = app.send(Command::Reset);
+    } else {
+        app.send_members(&Command::Reset);
     }
     app.sim.reset();
     app.debt = 0.0;
@@ -456,8 +476,32 @@ fn reset(app: &mut App) {
     );
 }
 
+/// In compare mode, whether `label`'s row is a varied key (each variant keeps its own value,
+/// so it is not edited), saying so.
+fn varied(app: &mut App, label: &str) -> bool {
+    let Some(c) = &app.compare else {
+        return false;
+    };
+    let Some((key, values)) = c
+        .axes
+        .iter()
+        .find(|(k, _)| k.rsplit('.').next() == Some(label))
+        .cloned()
+    else {
+        return false;
+    };
+    app.say(
+        Level::Warn,
+        format!("{key} is what the variants compare ({values}): each keeps its own"),
+    );
+    true
+}
+
 fn nudge(app: &mut App, dir: i32, coarse: bool) {
     let p = row(&app.sim, app.selected);
+    if varied(app, p.label) {
+        return;
+    }
     if p.kind == Kind::Solver {
         cycle_solver(app, dir);
         return;
@@ -614,6 +658,9 @@ fn cycle_solver(app: &mut App, dir: i32) {
 
 fn edit_value(app: &mut App) {
     let p = row(&app.sim, app.selected);
+    if varied(app, p.label) {
+        return;
+    }
     match p.kind {
         Kind::Solver => cycle_solver(app, 1),
         Kind::Toggle | Kind::Choice { .. } => nudge(app, 1, false),
@@ -926,6 +973,14 @@ fn toggle_recording(app: &mut App) {
 
 /// Opens the scene picker on the scene that is open now.
 fn open_picker(app: &mut App) {
+    if app.compare.is_some() {
+        // The variants are one scene's: another scene is another study.
+        app.say(
+            Level::Warn,
+            "compare shows one scene's variants: quit and run clothsim compare on another scene",
+        );
+        return;
+    }
     let files = json_files(&app.cwd);
     let origin = &app.sim.scene.origin;
     let selected = cloth_scene::BUNDLED

@@ -1,6 +1,7 @@
 //! The pure view: `view(&App, &mut Frame)` draws the model and reads nothing else (no clock,
 //! no terminal), so a snapshot of the same model is the same screen.
 
+mod compare;
 mod overlay;
 mod panel;
 mod plots;
@@ -29,6 +30,10 @@ pub fn view(app: &App, f: &mut Frame) {
     status::title(app, f, r.title, &theme);
     for &(slot, rect) in &r.panes {
         pane(app, f, slot, rect, &theme);
+    }
+    if app.compare.is_some() {
+        compare::panes(app, f, &r.variants, &theme);
+        compare::table(app, f, r.table, &theme);
     }
     panel::params(app, f, r.params, &theme);
     plots::plots(app, f, r.plots, &theme);

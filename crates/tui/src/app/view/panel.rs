@@ -38,7 +38,21 @@ pub fn params(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     let mut lines = Vec::with_capacity(list_h as usize);
     for i in (0..count).skip(first).take(list_h as usize) {
         let p = row(&app.sim, i);
-        let (value, unit, edited) = if p.kind == Kind::Solver {
+        // Compare mode: the varied key's row shows its values (each variant keeps its own).
+        let varied = app.compare.as_ref().and_then(|c| {
+            c.axes
+                .iter()
+                .find(|(k, _)| k.rsplit('.').next() == Some(p.label))
+                .map(|(_, v)| v.replace(' ', ""))
+        });
+        let (value, unit, edited) = if let Some(values) = varied {
+            let values: String = values.chars().take(value_w).collect();
+            (
+                values,
+                if p.kind == Kind::Solver { "" } else { p.unit },
+                false,
+            )
+        } else if p.kind == Kind::Solver {
             (
                 app.sim.entry().name().to_owned(),
                 "",
