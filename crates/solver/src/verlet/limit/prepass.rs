@@ -27,6 +27,11 @@ use std::arch::x86_64::{
 use super::super::sweep::DIRECTIONS;
 use crate::simd::{Avx2, load4};
 
+/// How far the directions reach before (`dx < 0`) and after the emitter's column, in the row
+/// `dy` = 0, -1 and -2 from it.
+const LO: [usize; 3] = [2, 1, 0];
+const HI: [usize; 3] = [0, 1, 0];
+
 /// The marks of the `out.len()` springs emitters starting at index `a0` of the window copied
 /// into `soa`, a row of a grid `out.len()` wide whose direction-`(dx, dy)` partners are at
 /// `dx + dy out.len()` from them (all negative, at least `-a0`: every partner row is in the
@@ -53,25 +58,38 @@ pub(super) fn marks_row_avx2(
         0, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, //
         0, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
     );
-    // Every stream is a slice of exactly `nw` values, the emitters' (`a`) or a direction's
-    // partners' (`b`, shifted by `dx + dy nw`), and the loop reads lanes `j..j + 4` of it with
-    // `j + 4 <= nw`.
-    let a = soa.each_ref().map(|s| &s[a0..][..nw]);
-    let b = DIRECTIONS.map(|(dx, dy, _)| {
+    // The three rows (`dy` = 0, -1, -2) of each coordinate as slices of the window, from
+    // `LO[k]` values before the row's first emitter to `HI[k]` after its last: with `j + 4 <=
+    // nw` the compiler finds each load in bounds once the direction loop is unrolled.
+    let mut rows: [[&[f64]; 3]; 3] = [[&[]; 3]; 3];
+    for (k, row) in rows.iter_mut().enumerate() {
         let start = a0
-            .checked_add_signed(dx + dy * nw as isize)
-            .expect("a partner in the window");
-        soa.each_ref().map(|s| &s[start..][..nw])
-    });
+            .checked_sub(k * nw + LO[k])
+            .expect("a partner row in the window");
+        for (r, s) in row.iter_mut().zip(soa) {
+            *r = &s[start..][..LO[k] + nw + HI[k]];
+        }
+    }
     let mut i = 0;
     while i < nw {
         let j = i.min(nw - 4);
         i += 4;
-        let pa = a.map(|s| load4(&s[j..]));
+        let own = rows[0];
+        let at = j + LO[0];
+        let pa = [
+            load4(&own[0][at..]),
+            load4(&own[1][at..]),
+            load4(&own[2][at..]),
+        ];
         let mut marks = _mm256_setzero_si256();
-        for t in 0..DIRECTIONS.len() {
-            let pb = b[t].map(|s| load4(&s[j..]));
-            let d = [0, 1, 2].map(|c| _mm256_sub_pd(pb[c], pa[c]));
+        for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
+            let k = dy.unsigned_abs();
+            let (row, at) = (rows[k], (j + LO[k]).wrapping_add_signed(dx));
+            let d = [
+                _mm256_sub_pd(load4(&row[0][at..]), pa[0]),
+                _mm256_sub_pd(load4(&row[1][at..]), pa[1]),
+                _mm256_sub_pd(load4(&row[2][at..]), pa[2]),
+            ];
             let len2 = _mm256_add_pd(
                 _mm256_add_pd(_mm256_mul_pd(d[0], d[0]), _mm256_mul_pd(d[1], d[1])),
                 _mm256_mul_pd(d[2], d[2]),
