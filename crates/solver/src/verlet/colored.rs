@@ -187,7 +187,6 @@ impl Springs<'_> {
     /// [`Springs::rows`] compiled for AVX2, with [`limit_group_avx2`]: four springs' checks
     /// and corrections at once, the same operations, so the same corrections.
     #[cfg(target_arch = "x86_64")]
-    #[allow(unsafe_code)]
     #[target_feature(enable = "avx2")]
     fn rows_avx2(&self, _: Avx2, points: &mut View<'_>, rows: std::ops::Range<usize>) {
         let layout = Layout::of(self.class);

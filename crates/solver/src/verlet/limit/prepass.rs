@@ -3,10 +3,9 @@
 //! # Why
 //!
 //! The portable row (`marks_row`) runs one loop per direction and gathers each direction's
-//! marks in memory, a load, an or and a store per point and direction; compiled for AVX2 it
-//! was a sixth of a `pinned4` step. Here the six compares of a group of four points are
-//! or-ed in a register and narrowed to four bytes once, so each point costs its arithmetic and
-//! one store.
+//! marks in memory, a load, an or and a store per point and direction. Here the six compares
+//! of a group of four points are or-ed in a register and narrowed to four bytes once, so each
+//! point costs its arithmetic and one store.
 //!
 //! # Same decisions
 //!

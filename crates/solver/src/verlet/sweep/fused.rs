@@ -22,8 +22,6 @@
 //! writes the very same bits, and its Verlet update is left to `integrate_row`, as is putting
 //! pinned points back.
 
-#![allow(unsafe_code)]
-
 use std::arch::x86_64::{
     __m256i, _CMP_EQ_OQ, _mm256_add_epi64, _mm256_add_pd, _mm256_and_pd, _mm256_and_si256,
     _mm256_andnot_pd, _mm256_blend_pd, _mm256_castsi256_pd, _mm256_cmp_pd, _mm256_cmpgt_epi64,
@@ -35,6 +33,7 @@ use std::arch::x86_64::{
 use cloth_mesh::Vec3;
 
 use super::{DIRECTIONS, PAD, POS_SLOTS, RowScratch, Stencil, SweepParams, valid_columns};
+use crate::simd::{load4, store4};
 
 /// `len` values of `s` from `start + shift`: a stream the loop reads four lanes at a time.
 #[inline(always)]
@@ -52,6 +51,7 @@ macro_rules! fused_pass {
     ($(#[$doc:meta])* $name:ident, $features:literal) => {
         impl Stencil {
             $(#[$doc])*
+            #[allow(unsafe_code)]
             #[target_feature(enable = $features)]
             pub(super) fn $name<const STRIDE: usize>(
                 &self,
@@ -77,9 +77,14 @@ macro_rules! fused_pass {
                 assert!(stride >= nw + 2 * PAD, "rows fit their stride");
                 // The position ring, checked, and its slots of rows y, y - 1 and y - 2 (`-dy`)
                 // and y + 1 (written), three rows (`x`, `y`, `z`) each: four distinct slots.
-                let ring = scratch.pos[..POS_SLOTS * 3 * stride].as_mut_ptr();
-                // SAFETY: slot `q % POS_SLOTS` starts inside the ring and holds `3 stride` values.
-                let slot = |q: usize| unsafe { ring.add((q % POS_SLOTS) * 3 * stride) };
+                let mut slots = [std::ptr::null_mut::<f64>(); POS_SLOTS];
+                for (slot, chunk) in slots
+                    .iter_mut()
+                    .zip(scratch.pos[..POS_SLOTS * 3 * stride].chunks_exact_mut(3 * stride))
+                {
+                    *slot = chunk.as_mut_ptr();
+                }
+                let slot = |q: usize| slots[q % POS_SLOTS];
                 let p = [slot(y), slot(y - 1), slot(y - 2)].map(<*mut f64>::cast_const);
                 let written = slot(y + 1);
                 let mut rest = [std::ptr::null::<f64>(); 6];
@@ -144,38 +149,49 @@ macro_rules! fused_pass {
                     let integrate = j == i;
                     i += 4;
                     let column = _mm256_add_epi64(_mm256_set1_epi64x(j as i64), lane);
-                    // SAFETY (every load and store below): each stream pointer starts `nw` values
-                    // (checked slices above) and `j + 4 <= nw`; each ring access is inside its
-                    // slot (checked slices) and its row (`stride >= nw + 2 PAD`, see above),
-                    // and force slots are 18 rows (`block`). The written streams
-                    // (row y's slot of the force ring, the totals) are disjoint from each other and
-                    // from every stream read after them: the ring's slots are split apart.
-                    unsafe {
-                        if let Some(ahead) = ahead_flat {
-                            // NOTE: row y + 1's copy into the ring, four points' `x y z | x y z
-                            // ...` split into `x`, `y` and `z` by register shuffles, is done here,
-                            // in the divider's shadow, rather than in a loop of its own before
-                            // the row. Its slot is none of the three this pass reads.
-                            let m = [0, 4, 8].map(|q| _mm256_loadu_pd(ahead[3 * j + q..][..4].as_ptr()));
-                            let xy_even = _mm256_blend_pd::<0b1100>(m[0], m[1]);
-                            let yz = _mm256_blend_pd::<0b1100>(m[1], m[2]);
-                            let zx = _mm256_permute2f128_pd::<0x21>(m[0], m[2]);
-                            let xy_odd = _mm256_shuffle_pd::<0b0101>(zx, yz);
-                            let split = [
-                                _mm256_unpacklo_pd(xy_even, xy_odd),
-                                _mm256_unpackhi_pd(xy_even, xy_odd),
-                                _mm256_blend_pd::<0b1010>(zx, yz),
-                            ];
-                            for (c, v) in split.into_iter().enumerate() {
-                                _mm256_storeu_pd(written.add(c * stride + PAD + j), v);
-                            }
+                    // The pointer loads and stores below rest on one argument: each stream pointer
+                    // starts `nw` values (checked slices above) and `j + 4 <= nw`; each ring
+                    // access is inside its slot (`3 stride` values, checked slices) and its row
+                    // (`stride >= nw + 2 PAD`, see above), and force slots are 18 rows (`block`).
+                    // The written streams (row y + 1's slot of the position ring, row y's slot of
+                    // the force ring, the totals) are disjoint from each other and from every
+                    // stream read after them: the rings' slots are split apart.
+                    if let Some(ahead) = ahead_flat {
+                        // NOTE: row y + 1's copy into the ring, four points' `x y z | x y z ...`
+                        // split into `x`, `y` and `z` by register shuffles, is done here, in the
+                        // divider's shadow, rather than in a loop of its own before the row. Its
+                        // slot is none of the three this pass reads.
+                        let at = 3 * j;
+                        let m = [
+                            load4(&ahead[at..]),
+                            load4(&ahead[at + 4..]),
+                            load4(&ahead[at + 8..]),
+                        ];
+                        let xy_even = _mm256_blend_pd::<0b1100>(m[0], m[1]);
+                        let yz = _mm256_blend_pd::<0b1100>(m[1], m[2]);
+                        let zx = _mm256_permute2f128_pd::<0x21>(m[0], m[2]);
+                        let xy_odd = _mm256_shuffle_pd::<0b0101>(zx, yz);
+                        let split = [
+                            _mm256_unpacklo_pd(xy_even, xy_odd),
+                            _mm256_unpackhi_pd(xy_even, xy_odd),
+                            _mm256_blend_pd::<0b1010>(zx, yz),
+                        ];
+                        for (c, v) in split.into_iter().enumerate() {
+                            // SAFETY: lanes `j..j + 4` of row `c` of row y + 1's slot (see above).
+                            unsafe { _mm256_storeu_pd(written.add(c * stride + PAD + j), v) };
                         }
+                    }
+                    // NOTE: the six square roots first, then the six divisions: each division
+                    // waits about 20 cycles for its root, and with the roots issued together the
+                    // divider has the next one queued meanwhile.
+                    let mut dirs = [[zero; 3]; 6];
+                    let mut lens = [zero; 6];
+                    let mut last = [zero; 3];
+                    // SAFETY: loads of lanes `j..j + 4` of rows of the position ring's slots
+                    // (shifted by `dx` in `-PAD..=PAD`) and of the rest lengths' stream; stores
+                    // to the same lanes of row y's slot of the force ring (see above).
+                    unsafe {
                         let av = [0, 1, 2].map(|c| _mm256_loadu_pd(p[0].add(c * stride + PAD + j)));
-                        // NOTE: the six square roots first, then the six divisions: each division
-                        // waits about 20 cycles for its root, and with the roots issued together
-                        // the divider has the next one queued meanwhile.
-                        let mut dirs = [[zero; 3]; 6];
-                        let mut lens = [zero; 6];
                         for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
                             // Row `y + dy`, shifted by `dx`.
                             let row = p[dy.unsigned_abs()];
@@ -190,7 +206,6 @@ macro_rules! fused_pass {
                             lens[t] = _mm256_sqrt_pd(len2);
                             dirs[t] = d;
                         }
-                        let mut last = [zero; 3];
                         for t in 0..6 {
                             let (d, len) = (dirs[t], lens[t]);
                             let stretch = _mm256_sub_pd(len, _mm256_loadu_pd(rest[t].add(j)));
@@ -206,10 +221,13 @@ macro_rules! fused_pass {
                                 _mm256_storeu_pd(out[t * 3 + c].add(j), last[c]);
                             }
                         }
-                        // Row r's sum in the course's order: its own six springs, then the ones it
-                        // is the far end of; `last` holds row y's direction-5 forces, the final
-                        // term.
-                        let mut sums = [zero; 3];
+                    }
+                    // Row r's sum in the course's order: its own six springs, then the ones it is
+                    // the far end of; `last` holds row y's direction-5 forces, the final term.
+                    let mut sums = [zero; 3];
+                    // SAFETY: loads of lanes `j..j + 4` (shifted by -1 to 2) of rows of the force
+                    // ring's read slots, stores to the same lanes of the totals (see above).
+                    unsafe {
                         for c in 0..3 {
                             let mut sum = weight[c];
                             for t in 0..6 {
@@ -232,29 +250,28 @@ macro_rules! fused_pass {
                             _mm256_storeu_pd(total[c].add(j), sum);
                             sums[c] = sum;
                         }
-                        if integrate {
-                            // The four points' forces interleaved as they lie in memory, `x y z x |
-                            // y z x y | z x y z`, then Verlet on three vectors of four values each.
-                            let [fx, fy, fz] = sums;
-                            let xy_even = _mm256_unpacklo_pd(fx, fy);
-                            let xy_odd = _mm256_unpackhi_pd(fx, fy);
-                            let zx = _mm256_unpacklo_pd(fz, xy_odd);
-                            let yz = _mm256_unpackhi_pd(xy_odd, fz);
-                            let f = [
-                                _mm256_permute2f128_pd::<0x20>(xy_even, zx),
-                                _mm256_blend_pd::<0b1100>(yz, xy_even),
-                                _mm256_permute2f128_pd::<0x31>(zx, yz),
-                            ];
-                            for (q, f) in f.into_iter().enumerate() {
-                                let at = 3 * j + 4 * q;
-                                let p = _mm256_loadu_pd(p_flat[at..at + 4].as_ptr());
-                                let l = &mut l_flat[at..at + 4];
-                                let previous = _mm256_loadu_pd(l.as_ptr());
-                                let moved = _mm256_mul_pd(_mm256_sub_pd(p, previous), keep);
-                                let new =
-                                    _mm256_add_pd(_mm256_add_pd(p, moved), _mm256_mul_pd(f, scale));
-                                _mm256_storeu_pd(l.as_mut_ptr(), new);
-                            }
+                    }
+                    if integrate {
+                        // The four points' forces interleaved as they lie in memory, `x y z x |
+                        // y z x y | z x y z`, then Verlet on three vectors of four values each.
+                        let [fx, fy, fz] = sums;
+                        let xy_even = _mm256_unpacklo_pd(fx, fy);
+                        let xy_odd = _mm256_unpackhi_pd(fx, fy);
+                        let zx = _mm256_unpacklo_pd(fz, xy_odd);
+                        let yz = _mm256_unpackhi_pd(xy_odd, fz);
+                        let f = [
+                            _mm256_permute2f128_pd::<0x20>(xy_even, zx),
+                            _mm256_blend_pd::<0b1100>(yz, xy_even),
+                            _mm256_permute2f128_pd::<0x31>(zx, yz),
+                        ];
+                        for (q, f) in f.into_iter().enumerate() {
+                            let at = 3 * j + 4 * q;
+                            let p = load4(&p_flat[at..at + 4]);
+                            let l = &mut l_flat[at..at + 4];
+                            let previous = load4(l);
+                            let moved = _mm256_mul_pd(_mm256_sub_pd(p, previous), keep);
+                            let new = _mm256_add_pd(_mm256_add_pd(p, moved), _mm256_mul_pd(f, scale));
+                            store4(l, new);
                         }
                     }
                 }
