@@ -77,8 +77,8 @@ const POS_SLOTS: usize = 4;
 /// Declares the row strides the fused pass is compiled for, and its dispatch by stride.
 ///
 /// NOTE: the fused pass reads and writes about 80 streams, the rows of the rings, and with a
-/// stride known only at run time each is a pointer of its own: with 16 general registers, 94
-/// of the loop's 319 instructions per column group reloaded them from the stack. With the
+/// stride known only at run time each is a pointer of its own, and with 16 general registers
+/// the loop reloads them from the stack. With the
 /// stride a constant, every stream of a ring slot is the slot's pointer plus a fixed offset,
 /// and the reloads go. So the rings' stride is rounded up to one of a few classes (each at most
 /// 1.5 times the one before, so a ring grows by less than half), and the pass is compiled once
