@@ -36,7 +36,9 @@
 use cloth_mesh::{ClothMesh, GridSpec, SpringKind, Vec3};
 
 use crate::SolveError;
-use crate::simd::{Avx2, Simd};
+#[cfg(target_arch = "x86_64")]
+use crate::simd::Avx2;
+use crate::simd::Simd;
 
 #[cfg(target_arch = "x86_64")]
 mod fused;
