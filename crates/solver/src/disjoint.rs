@@ -13,12 +13,12 @@ pub(crate) struct Disjoint<'a, T> {
     _borrow: std::marker::PhantomData<&'a mut [T]>,
 }
 
-// SAFETY: the threads sharing a `Disjoint` touch disjoint elements (each use says why), and `T`
-// is sent between them.
+// SAFETY: the threads sharing a `Disjoint` touch disjoint elements (each use of `run` says why),
+// and `T` is sent between them.
 #[allow(unsafe_code)]
 unsafe impl<T: Send> Sync for Disjoint<'_, T> {}
 
-impl<'a, T: Copy> Disjoint<'a, T> {
+impl<'a, T> Disjoint<'a, T> {
     /// Shares `slice` for the time of the borrow.
     pub(crate) fn new(slice: &'a mut [T]) -> Self {
         Self {
@@ -28,44 +28,23 @@ impl<'a, T: Copy> Disjoint<'a, T> {
         }
     }
 
-    /// Element `i`.
+    /// The `len` elements from `start`, for one thread's reads and writes.
     ///
     /// # Safety
-    /// No other thread may write element `i` at the same time.
-    #[allow(unsafe_code)]
-    #[inline]
-    pub(crate) unsafe fn get(&self, i: usize) -> T {
-        assert!(i < self.len, "an index past the end of a shared slice");
-        // SAFETY: in bounds (just checked); the caller guarantees no concurrent write.
-        unsafe { *self.ptr.add(i) }
-    }
-
-    /// Sets element `i`.
+    /// While the returned slice lives, nothing else (no other thread, no other slice from this
+    /// `Disjoint`) may read or write these elements.
     ///
-    /// # Safety
-    /// No other thread may read or write element `i` at the same time.
-    #[allow(unsafe_code)]
+    /// # Panics
+    /// When the run is past the end of the slice.
+    #[allow(unsafe_code, clippy::mut_from_ref)]
     #[inline]
-    pub(crate) unsafe fn set(&self, i: usize, value: T) {
-        assert!(i < self.len, "an index past the end of a shared slice");
-        // SAFETY: in bounds (just checked); the caller guarantees exclusive access.
-        unsafe { *self.ptr.add(i) = value }
-    }
-
-    /// A pointer to the `len` elements from `start`, for a task's vector loads and stores.
-    ///
-    /// # Safety
-    /// No other thread may write these elements while the pointer is read from, nor read or
-    /// write them while it is written through.
-    #[cfg(target_arch = "x86_64")]
-    #[allow(unsafe_code)]
-    #[inline]
-    pub(crate) unsafe fn run(&self, start: usize, len: usize) -> *mut T {
+    pub(crate) unsafe fn run(&self, start: usize, len: usize) -> &mut [T] {
         assert!(
             start <= self.len && len <= self.len - start,
             "a run past the end of a shared slice"
         );
-        // SAFETY: in bounds (just checked).
-        unsafe { self.ptr.add(start) }
+        // SAFETY: in bounds (just checked) of a slice borrowed mutably for `'a`, which outlives
+        // `&self`; the caller guarantees that the run is touched through this slice alone.
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(start), len) }
     }
 }

@@ -42,3 +42,26 @@ impl Default for Simd {
         Self::detect()
     }
 }
+
+/// The first four values of `values` as an AVX register: the vector passes' load, bounds
+/// checked, with no `unsafe`.
+///
+/// # Panics
+/// When `values` holds fewer than four values.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+pub(crate) fn load4(values: &[f64]) -> std::arch::x86_64::__m256d {
+    bytemuck::pod_read_unaligned(bytemuck::cast_slice(&values[..4]))
+}
+
+/// Writes `v` into the first four values of `values` ([`load4`]'s inverse).
+///
+/// # Panics
+/// When `values` holds fewer than four values.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+pub(crate) fn store4(values: &mut [f64], v: std::arch::x86_64::__m256d) {
+    values[..4].copy_from_slice(bytemuck::cast_slice(&[v]));
+}

@@ -130,27 +130,21 @@ fn count_run(cell_of: &[u32], counts: &mut Vec<u32>, cells: usize) {
 /// Places the run of points starting at `first` (whose cells are `cell_of`) in `members`,
 /// `next[c]` being the run's next place in cell `c`.
 fn place_run(members: &Disjoint<'_, u32>, first: usize, cell_of: &[u32], next: &mut [u32]) {
-    let n = cell_of.len();
     let mut k = 0;
-    while k < n {
-        let c = cell_of[k] as usize;
-        let mut place = next[c];
-        // NOTE: a run of points in one cell takes consecutive places from a register.
-        loop {
-            // SAFETY: the prefix sum gave this run of points places `next[c]..` in cell `c`,
-            // exactly as many as it counted there and disjoint from every other run's and
-            // cell's; only this run writes them, each once.
-            #[allow(unsafe_code)]
-            unsafe {
-                members.set(place as usize, (first + k) as u32);
-            }
-            place += 1;
-            k += 1;
-            if k == n || cell_of[k] as usize != c {
-                break;
-            }
+    // NOTE: a run of points in one cell takes consecutive places.
+    for cells in cell_of.chunk_by(|a, b| a == b) {
+        let c = cells[0] as usize;
+        let place = next[c] as usize;
+        // SAFETY: the prefix sum gave this run of points places `next[c]..` in cell `c`,
+        // exactly as many as it counted there and disjoint from every other run's and cell's;
+        // only this run writes them, each once.
+        #[allow(unsafe_code)]
+        let places = unsafe { members.run(place, cells.len()) };
+        for (slot, point) in places.iter_mut().zip(first + k..) {
+            *slot = point as u32;
         }
-        next[c] = place;
+        k += cells.len();
+        next[c] = (place + cells.len()) as u32;
     }
 }
 

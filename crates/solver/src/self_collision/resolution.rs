@@ -131,6 +131,27 @@ impl Boxes<'_> {
         );
     }
 
+    /// The anchor of point `i`, a point of the box this task resolves.
+    #[inline]
+    fn anchor(&self, i: u32) -> Vec3 {
+        // SAFETY: only the task that resolves a box touches its points' anchors; the run is
+        // read and dropped here.
+        #[allow(unsafe_code)]
+        unsafe {
+            self.anchors.run(i as usize, 1)[0]
+        }
+    }
+
+    /// Sets the anchor of point `i`, a point of the box this task resolves.
+    #[inline]
+    fn set_anchor(&self, i: u32, p: Vec3) {
+        // SAFETY: as in `anchor`: the run is written and dropped here.
+        #[allow(unsafe_code)]
+        unsafe {
+            self.anchors.run(i as usize, 1)[0] = p;
+        }
+    }
+
     /// Resolves one box: `members` are its points' indices in index order, `slots` its run of
     /// `sorted`, `memory` what is known of it (updated). True when it moved a point.
     #[inline]
@@ -139,17 +160,11 @@ impl Boxes<'_> {
         if members.len() < 2 {
             return false;
         }
-        // SAFETY (both blocks): only this box's points' anchors are touched, and only this
-        // task resolves this box.
         // NOTE: a box whose points all moved, since they were anchored, within its allowance of
         // the move of its first point is still clear (see `Repulsion::allowance`): nothing to
         // do. A NaN distance fails the test, so a diverged point is always looked at.
         if memory.allowed >= 0.0 {
-            #[allow(unsafe_code)]
-            let moved = |i: u32| {
-                let i = i as usize;
-                self.positions[i] - unsafe { self.anchors.get(i) }
-            };
+            let moved = |i: u32| self.positions[i as usize] - self.anchor(i);
             let (allowed, shift) = (memory.allowed, moved(members[0]));
             if dist2(&shift) <= FOLLOW2 * allowed
                 && members[1..]
@@ -183,10 +198,7 @@ impl Boxes<'_> {
             if memory.allowed >= 0.0 {
                 memory.skips = 0;
                 for (slot, &i) in slots.iter().zip(members) {
-                    #[allow(unsafe_code)]
-                    unsafe {
-                        self.anchors.set(i as usize, *slot);
-                    }
+                    self.set_anchor(i, *slot);
                 }
             }
             return false;

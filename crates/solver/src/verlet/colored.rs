@@ -187,7 +187,6 @@ impl Springs<'_> {
     /// [`Springs::rows`] compiled for AVX2, with [`limit_group_avx2`]: four springs' checks
     /// and corrections at once, the same operations, so the same corrections.
     #[cfg(target_arch = "x86_64")]
-    #[allow(unsafe_code)]
     #[target_feature(enable = "avx2")]
     fn rows_avx2(&self, _: Avx2, points: &mut View<'_>, rows: std::ops::Range<usize>) {
         let layout = Layout::of(self.class);
@@ -311,7 +310,6 @@ impl Layout {
 /// loads with inserts and 24 scalar stores.
 ///
 #[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
 #[inline]
 #[target_feature(enable = "avx2")]
 fn limit_group_avx2(
@@ -320,30 +318,24 @@ fn limit_group_avx2(
     offset: isize,
     rest: &[f64],
     pinned: &[bool],
-    points: &View<'_>,
+    points: &mut View<'_>,
     ratio: f64,
 ) {
     use lanes::{Lanes, join, load, load4, pins, split, store};
     let b0 = a0.wrapping_add_signed(offset);
     if layout == Layout::Rows {
-        let (pa, pb) = (points.run(a0, LANES), points.run(b0, LANES));
-        // SAFETY: `View::run` checked both runs of four points, this task's alone.
-        let (a, b) = unsafe { (load(pa), load(pb)) };
+        let (a, b) = (load(points.run(a0, LANES)), load(points.run(b0, LANES)));
         let rest = load4(&rest[a0..a0 + LANES]);
         let (pin_a, pin_b) = (pins(&pinned[a0..a0 + LANES]), pins(&pinned[b0..b0 + LANES]));
         if let Some((a, b)) = correct(Lanes { a, b }, rest, pin_a, pin_b, ratio) {
-            // SAFETY: as for the loads.
-            unsafe {
-                store(pa, a);
-                store(pb, b);
-            }
+            store(points.run(a0, LANES), a);
+            store(points.run(b0, LANES), b);
         }
         return;
     }
     // The partners come first in the run of 8 points.
     let run = points.run(b0, 2 * LANES);
-    // SAFETY: `View::run` checked the run of eight points, this task's alone.
-    let (lo, hi) = unsafe { (load(run), load(run.add(LANES))) };
+    let (lo, hi) = (load(&run[..LANES]), load(&run[LANES..]));
     let rest = &rest[b0..b0 + 2 * LANES];
     let pinned = &pinned[b0..b0 + 2 * LANES];
     let pairs = layout == Layout::Pairs;
@@ -359,11 +351,9 @@ fn limit_group_avx2(
         for c in 0..3 {
             (lo[c], hi[c]) = join(pairs, b[c], a[c]);
         }
-        // SAFETY: as for the loads.
-        unsafe {
-            store(run, lo);
-            store(run.add(LANES), hi);
-        }
+        let (run_lo, run_hi) = run.split_at_mut(LANES);
+        store(run_lo, lo);
+        store(run_hi, hi);
     }
 }
 
@@ -428,15 +418,16 @@ fn correct(
 
 /// Four points' coordinates as x, y and z lanes, and the shuffles between them and memory.
 #[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
 mod lanes {
     use std::arch::x86_64::{
         __m256d, _mm_cvtsi32_si128, _mm256_blend_pd, _mm256_castsi256_pd, _mm256_cvtepu8_epi64,
-        _mm256_loadu_pd, _mm256_permute2f128_pd, _mm256_setzero_si256, _mm256_shuffle_pd,
-        _mm256_storeu_pd, _mm256_sub_epi64, _mm256_unpackhi_pd, _mm256_unpacklo_pd,
+        _mm256_permute2f128_pd, _mm256_setzero_si256, _mm256_shuffle_pd, _mm256_sub_epi64,
+        _mm256_unpackhi_pd, _mm256_unpacklo_pd,
     };
 
     use cloth_mesh::Vec3;
+
+    pub(super) use crate::simd::load4;
 
     /// The x, y and z lanes of four points.
     pub(super) type Xyz = [__m256d; 3];
@@ -448,26 +439,17 @@ mod lanes {
         pub(super) b: Xyz,
     }
 
-    /// The four points from `p`, as lanes.
+    /// The first four points of `points`, as lanes.
     ///
-    /// # Safety
-    /// `p` points at four points that may be read.
+    /// # Panics
+    /// When `points` holds fewer than four points.
     #[inline]
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn load(p: *const Vec3) -> Xyz {
-        const { assert!(size_of::<Vec3>() == 3 * size_of::<f64>()) };
-        let f = p.cast::<f64>();
+    pub(super) fn load(points: &[Vec3]) -> Xyz {
+        // Four points are 12 f64s (`Vec3` is `Pod`: three f64s, no padding).
+        let f: &[f64] = bytemuck::cast_slice(&points[..4]);
         // m0 = x0 y0 z0 x1, m1 = y1 z1 x2 y2, m2 = z2 x3 y3 z3.
-        // SAFETY: a `Vec3` is three contiguous f64s (nalgebra's `repr(C)` matrix over a
-        // `repr(transparent)` array; size checked above), so four points are 12 readable f64s
-        // (the contract).
-        let (m0, m1, m2) = unsafe {
-            (
-                _mm256_loadu_pd(f),
-                _mm256_loadu_pd(f.add(4)),
-                _mm256_loadu_pd(f.add(8)),
-            )
-        };
+        let (m0, m1, m2) = (load4(&f[..4]), load4(&f[4..8]), load4(&f[8..]));
         let xy = _mm256_blend_pd(m0, m1, 0b1100); // x0 y0 x2 y2
         let zx = _mm256_permute2f128_pd(m0, m2, 0x21); // z0 x1 z2 x3
         let yz = _mm256_blend_pd(m1, m2, 0b1100); // y1 z1 y3 z3
@@ -478,32 +460,23 @@ mod lanes {
         ]
     }
 
-    /// Writes lanes back as the four points from `p` ([`load`]'s inverse).
+    /// Writes lanes back as the first four points of `points` ([`load`]'s inverse).
     ///
-    /// # Safety
-    /// `p` points at four points that may be written.
+    /// # Panics
+    /// When `points` holds fewer than four points.
     #[inline]
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn store(p: *mut Vec3, [x, y, z]: Xyz) {
-        let f = p.cast::<f64>();
+    pub(super) fn store(points: &mut [Vec3], [x, y, z]: Xyz) {
+        let f: &mut [f64] = bytemuck::cast_slice_mut(&mut points[..4]);
         let xy = _mm256_shuffle_pd(x, y, 0b0000); // x0 y0 x2 y2
         let yz = _mm256_shuffle_pd(y, z, 0b1111); // y1 z1 y3 z3
         let zx = _mm256_blend_pd(z, x, 0b1010); // z0 x1 z2 x3
-        // SAFETY: as in `load`: four points are 12 writable f64s (the contract).
-        unsafe {
-            _mm256_storeu_pd(f, _mm256_permute2f128_pd(xy, zx, 0x20));
-            _mm256_storeu_pd(f.add(4), _mm256_blend_pd(yz, xy, 0b1100));
-            _mm256_storeu_pd(f.add(8), _mm256_permute2f128_pd(zx, yz, 0x31));
-        }
-    }
-
-    /// Four values as lanes.
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn load4(values: &[f64]) -> __m256d {
-        let values: &[f64; 4] = values.try_into().expect("four values");
-        // SAFETY: four f64s are readable from `values`.
-        unsafe { _mm256_loadu_pd(values.as_ptr()) }
+        let m = [
+            _mm256_permute2f128_pd(xy, zx, 0x20),
+            _mm256_blend_pd(yz, xy, 0b1100),
+            _mm256_permute2f128_pd(zx, yz, 0x31),
+        ];
+        f.copy_from_slice(bytemuck::cast_slice(&m));
     }
 
     /// Four pin flags as lane masks (all ones where pinned).
@@ -551,37 +524,29 @@ impl<'a> View<'a> {
     unsafe fn new(shared: &'a Disjoint<'a, Vec3>) -> Self {
         Self(shared)
     }
-}
 
-// Off x86-64 the groups are corrected a point at a time, with no runs of points.
-#[cfg(target_arch = "x86_64")]
-impl View<'_> {
-    /// A pointer to the `len` points from `start`, this task's alone (`View::new`).
-    #[allow(unsafe_code)]
+    /// The `len` points from `start`, this task's alone (`View::new`).
     #[inline(always)]
-    fn run(&self, start: usize, len: usize) -> *mut Vec3 {
-        // SAFETY: no other task touches these points (`View::new`).
-        unsafe { self.0.run(start, len) }
+    fn run(&mut self, start: usize, len: usize) -> &mut [Vec3] {
+        // SAFETY: no other task touches these points (`View::new`), and the returned borrow of
+        // `self` keeps this task's other runs off them while it lives.
+        #[allow(unsafe_code)]
+        unsafe {
+            self.0.run(start, len)
+        }
     }
 }
 
 impl Points for View<'_> {
     #[inline(always)]
     fn at(&self, i: usize) -> Vec3 {
-        // SAFETY: no other task touches point `i` (`View::new`).
-        #[allow(unsafe_code)]
-        unsafe {
-            self.0.get(i)
-        }
+        let mut view = View(self.0);
+        view.run(i, 1)[0]
     }
 
     #[inline(always)]
     fn put(&mut self, i: usize, p: Vec3) {
-        // SAFETY: as in `at`.
-        #[allow(unsafe_code)]
-        unsafe {
-            self.0.set(i, p);
-        }
+        self.run(i, 1)[0] = p;
     }
 }
 

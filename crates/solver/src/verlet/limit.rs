@@ -51,16 +51,9 @@ pub(crate) struct StretchSweep {
     scratch: Vec<BandScratch>,
 }
 
-/// Which build of the pre-pass's row function (`prepass.rs`) its rows take.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-enum RowBuild {
-    /// The portable rows (`marks_row`).
-    Portable,
-    /// `prepass::marks_row_avx2`, on a CPU that runs it.
-    #[cfg(target_arch = "x86_64")]
-    Avx2(Avx2),
-}
+/// The pre-pass's vector row function (`prepass::marks_row_avx2`) when the CPU runs it: the
+/// marks of a row from the window's copy, the direction bounds and the row's first emitter.
+type VectorRow<'a> = Option<&'a dyn Fn(&[Vec<f64>; 3], &[f64; 6], usize, &mut [u8])>;
 
 /// What every band reads.
 #[derive(Debug, Default, Clone)]
@@ -259,7 +252,7 @@ impl BandScratch {
             }
             return;
         }
-        self.prepass_rows(bounds, stencil, positions, first, rows, RowBuild::Portable);
+        self.prepass_rows(bounds, stencil, positions, first, rows, None);
     }
 
     /// The pre-pass compiled for AVX2: the copy vectorised by the compiler, the rows with
@@ -275,18 +268,15 @@ impl BandScratch {
         first: usize,
         rows: Range<usize>,
     ) {
-        self.prepass_rows(
-            bounds,
-            stencil,
-            positions,
-            first,
-            rows,
-            RowBuild::Avx2(avx2),
-        );
+        // A closure written here takes this function's target features (no `unsafe` call).
+        let row = |soa: &[Vec<f64>; 3], floor: &[f64; 6], a0: usize, out: &mut [u8]| {
+            prepass::marks_row_avx2(avx2, soa, floor, a0, out);
+        };
+        self.prepass_rows(bounds, stencil, positions, first, rows, Some(&row));
     }
 
     /// The pre-pass itself, for whatever instruction set the caller was compiled for; the rows
-    /// with every partner row in the window take `build`'s row function.
+    /// with every partner row in the window take `vector`, when given.
     #[inline(always)]
     fn prepass_rows(
         &mut self,
@@ -295,7 +285,7 @@ impl BandScratch {
         positions: &[Vec3],
         first: usize,
         rows: Range<usize>,
-        build: RowBuild,
+        vector: VectorRow<'_>,
     ) {
         let nw = stencil.nw();
         self.copy_soa(positions);
@@ -303,13 +293,8 @@ impl BandScratch {
             let at = Self::margin(nw) + k * nw;
             let out = &mut self.look[at..at + nw];
             let (floor, a0) = (&bounds.floor, y * nw - first);
-            match build {
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: the CPU runs AVX2: an `Avx2` exists.
-                #[allow(unsafe_code)]
-                RowBuild::Avx2(_) if y >= 2 && nw >= 4 => unsafe {
-                    prepass::marks_row_avx2(&self.soa, floor, a0, out);
-                },
+            match vector {
+                Some(row) if y >= 2 && nw >= 4 => row(&self.soa, floor, a0, out),
                 _ => marks_row(&self.soa, bounds, &mut self.row_marks, nw, y, first, out),
             }
         }
@@ -548,13 +533,14 @@ mod tests {
         let window = &positions[first..rows.end * nw];
         let emitters = rows.start * nw..rows.end * nw;
         let margin = BandScratch::margin(nw);
-        let run = |build: Option<RowBuild>| {
+        let run = |portable: bool| {
             let mut scratch = BandScratch::default();
             scratch.look.resize(margin + emitters.len() + margin, 0);
             let (bounds, rows) = (&sweep.bounds, rows.clone());
-            match build {
-                Some(build) => scratch.prepass_rows(bounds, stencil, window, first, rows, build),
-                None => scratch.prepass(bounds, stencil, window, first, rows),
+            if portable {
+                scratch.prepass_rows(bounds, stencil, window, first, rows, None);
+            } else {
+                scratch.prepass(bounds, stencil, window, first, rows);
             }
             let exists = &sweep.bounds.exists[emitters.clone()];
             let marks = &scratch.look[margin..margin + emitters.len()];
@@ -564,9 +550,9 @@ mod tests {
                 .map(|(m, e)| m & e)
                 .collect::<Vec<u8>>()
         };
-        let portable = run(Some(RowBuild::Portable));
+        let portable = run(true);
         // The dispatched build.
-        (vec![run(None)], portable)
+        (vec![run(false)], portable)
     }
 
     #[test]

@@ -36,7 +36,9 @@
 use cloth_mesh::{ClothMesh, GridSpec, SpringKind, Vec3};
 
 use crate::SolveError;
-use crate::simd::{Avx2, Simd};
+#[cfg(target_arch = "x86_64")]
+use crate::simd::Avx2;
+use crate::simd::Simd;
 
 #[cfg(target_arch = "x86_64")]
 mod fused;
@@ -51,8 +53,20 @@ pub(crate) const DIRECTIONS: [(isize, isize, SpringKind); 6] = [
     (0, -2, SpringKind::Bending),
 ];
 
-/// Whether a sweep's rows take the fused pass (`sweep/fused.rs`): its AVX2 proof when they do.
-pub(crate) type Fused = Option<Avx2>;
+/// The fused pass (`sweep/fused.rs`) when a sweep's rows take it: given the stencil, the scratch,
+/// the parameters, the row `y`, row `y - 2`'s positions, row `y + 1`'s and row `y - 2`'s new
+/// positions, it returns the columns it integrated.
+pub(crate) type Fused<'a> = Option<
+    &'a dyn Fn(
+        &Stencil,
+        &mut RowScratch,
+        &SweepParams,
+        usize,
+        &[Vec3],
+        &[Vec3],
+        &mut [Vec3],
+    ) -> usize,
+>;
 
 /// Zero columns on each side of a row buffer, so a point can read the forces of springs emitted
 /// up to two columns away without bounds tests.
@@ -65,8 +79,8 @@ const POS_SLOTS: usize = 4;
 /// Declares the row strides the fused pass is compiled for, and its dispatch by stride.
 ///
 /// NOTE: the fused pass reads and writes about 80 streams, the rows of the rings, and with a
-/// stride known only at run time each is a pointer of its own: with 16 general registers, 94
-/// of the loop's 319 instructions per column group reloaded them from the stack. With the
+/// stride known only at run time each is a pointer of its own, and with 16 general registers
+/// the loop reloads them from the stack. With the
 /// stride a constant, every stream of a ring slot is the slot's pointer plus a fixed offset,
 /// and the reloads go. So the rings' stride is rounded up to one of a few classes (each at most
 /// 1.5 times the one before, so a ring grows by less than half), and the pass is compiled once
@@ -80,7 +94,8 @@ macro_rules! ring_strides {
         /// Runs the fused pass compiled for the scratch's stride, or the one with the stride a
         /// variable when it is not in [`RING_STRIDES`].
         #[cfg(target_arch = "x86_64")]
-        #[allow(unsafe_code, clippy::too_many_arguments)]
+        #[allow(clippy::too_many_arguments)]
+        #[target_feature(enable = "avx2")]
         fn fused_pass(
             _: Avx2,
             stencil: &Stencil,
@@ -91,15 +106,12 @@ macro_rules! ring_strides {
             ahead: &[Vec3],
             next: &mut [Vec3],
         ) -> usize {
-            // SAFETY: the pass is compiled for AVX2, which the CPU runs: an `Avx2` exists.
-            unsafe {
-                match scratch.stride {
-                    $(
-                        $stride => stencil
-                            .emit_sum_integrate_avx2::<$stride>(scratch, params, y, positions, ahead, next),
-                    )+
-                    _ => stencil.emit_sum_integrate_avx2::<0>(scratch, params, y, positions, ahead, next),
-                }
+            match scratch.stride {
+                $(
+                    $stride => stencil
+                        .emit_sum_integrate_avx2::<$stride>(scratch, params, y, positions, ahead, next),
+                )+
+                _ => stencil.emit_sum_integrate_avx2::<0>(scratch, params, y, positions, ahead, next),
             }
         }
     };
@@ -301,7 +313,27 @@ impl Stencil {
         r0: usize,
         r1: usize,
     ) {
-        self.sweep_rows(Some(avx2), scratch, params, positions, pinned, next, r0, r1);
+        // NOTE: a closure written here takes this function's target features, so it calls the
+        // AVX2 pass without `unsafe`.
+        let fused = |stencil: &Stencil,
+                     scratch: &mut RowScratch,
+                     params: &SweepParams,
+                     y: usize,
+                     positions: &[Vec3],
+                     ahead: &[Vec3],
+                     next: &mut [Vec3]| {
+            fused_pass(avx2, stencil, scratch, params, y, positions, ahead, next)
+        };
+        self.sweep_rows(
+            Some(&fused),
+            scratch,
+            params,
+            positions,
+            pinned,
+            next,
+            r0,
+            r1,
+        );
     }
 
     /// The sweep itself, for whatever instruction set the caller was compiled for: everything
@@ -366,10 +398,7 @@ impl Stencil {
                 let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
                 // Columns already integrated by the fused pass.
                 let done = match fused {
-                    #[cfg(target_arch = "x86_64")]
-                    Some(avx2) if fuse => {
-                        fused_pass(avx2, self, scratch, params, y, positions, ahead, row)
-                    }
+                    Some(fused) if fuse => fused(self, scratch, params, y, positions, ahead, row),
                     _ => {
                         self.sum_row(scratch, params, r);
                         0

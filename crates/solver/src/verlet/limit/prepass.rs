@@ -3,10 +3,9 @@
 //! # Why
 //!
 //! The portable row (`marks_row`) runs one loop per direction and gathers each direction's
-//! marks in memory, a load, an or and a store per point and direction; compiled for AVX2 it
-//! was a sixth of a `pinned4` step. Here the six compares of a group of four points are
-//! or-ed in a register and narrowed to four bytes once, so each point costs its arithmetic and
-//! one store.
+//! marks in memory, a load, an or and a store per point and direction. Here the six compares
+//! of a group of four points are or-ed in a register and narrowed to four bytes once, so each
+//! point costs its arithmetic and one store.
 //!
 //! # Same decisions
 //!
@@ -17,95 +16,90 @@
 //! the window and set bits the sweep never reads: it masks every point's marks with the
 //! springs it emits.
 
-#![allow(unsafe_code)]
-
 use std::arch::x86_64::{
     _CMP_NLE_UQ, _mm_cvtsi128_si32, _mm256_add_pd, _mm256_and_si256, _mm256_castpd_si256,
-    _mm256_castsi256_si128, _mm256_cmp_pd, _mm256_extracti128_si256, _mm256_loadu_pd,
-    _mm256_mul_pd, _mm256_or_si256, _mm256_set1_epi64x, _mm256_set1_pd, _mm256_setr_epi8,
-    _mm256_setzero_si256, _mm256_shuffle_epi8, _mm256_sub_pd,
+    _mm256_castsi256_si128, _mm256_cmp_pd, _mm256_extracti128_si256, _mm256_mul_pd,
+    _mm256_or_si256, _mm256_set1_epi64x, _mm256_set1_pd, _mm256_setr_epi8, _mm256_setzero_si256,
+    _mm256_shuffle_epi8, _mm256_sub_pd,
 };
 
 use super::super::sweep::DIRECTIONS;
+use crate::simd::{Avx2, load4};
 
-/// Defines a build of the row function for `$features`.
+/// How far the directions reach before (`dx < 0`) and after the emitter's column, in the row
+/// `dy` = 0, -1 and -2 from it.
+const LO: [usize; 3] = [2, 1, 0];
+const HI: [usize; 3] = [0, 1, 0];
+
+/// The marks of the `out.len()` springs emitters starting at index `a0` of the window copied
+/// into `soa`, a row of a grid `out.len()` wide whose direction-`(dx, dy)` partners are at
+/// `dx + dy out.len()` from them (all negative, at least `-a0`: every partner row is in the
+/// window), against the direction bounds `floor`.
+/// `out.len()` must be at least 4; the last group overlaps the one before when it is not a
+/// multiple of 4, and writes the same bytes again.
 ///
-/// NOTE: a macro, not one `#[inline(always)]` body shared by two thin wrappers, for the reason
-/// given at `fused_pass!` (`sweep/fused.rs`): the body's closures take the target features of
-/// the function they are written in.
-macro_rules! marks_row {
-    ($(#[$doc:meta])* $name:ident, $features:literal) => {
-        $(#[$doc])*
-        #[target_feature(enable = $features)]
-        pub(super) fn $name(soa: &[Vec<f64>; 3], floor: &[f64; 6], a0: usize, out: &mut [u8]) {
-            let nw = out.len();
-            assert!(nw >= 4, "a row of at least one four-lane group");
-            let floor = floor.map(|f| _mm256_set1_pd(f));
-            let bit = [0, 1, 2, 3, 4, 5].map(|t| _mm256_set1_epi64x(1 << t));
-            // Byte 0 of each 64-bit lane to bytes 0 and 1 of its 128-bit half.
-            let narrow = _mm256_setr_epi8(
-                0, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, //
-                0, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
-            );
-            // NOTE: every stream is checked once a row, as a slice of exactly `nw` values, and
-            // the loop reads lanes `j..j + 4` of it through a pointer: checking each load (21 a
-            // group, two compares and branches each) would outnumber the arithmetic. The
-            // pointers are the three rows' (`dy` = 0, 1, 2) plus the direction's `dx`, a
-            // constant once the direction loop is unrolled, so nine registers address all 21
-            // streams.
-            let stream = |s: &[f64], shift: isize| {
-                let start = a0
-                    .checked_add_signed(shift)
-                    .expect("a partner in the window");
-                s[start..][..nw].as_ptr()
-            };
-            for &(dx, dy, _) in &DIRECTIONS {
-                for s in soa {
-                    stream(s, dx + dy * nw as isize);
-                }
-            }
-            let rows = [0, 1, 2].map(|dy| soa.each_ref().map(|s| stream(s, -dy * nw as isize)));
-            let mut i = 0;
-            while i < nw {
-                let j = i.min(nw - 4);
-                i += 4;
-                // SAFETY (every load): each stream of `nw` values was checked above (a
-                // direction's is its row's, shifted by `dx`: at `dx + dy nw`), and
-                // `j + 4 <= nw`; the CPU supports AVX2 (this function's target features).
-                let pa = rows[0].map(|s| unsafe { _mm256_loadu_pd(s.add(j)) });
-                let mut marks = _mm256_setzero_si256();
-                for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
-                    let row = rows[dy.unsigned_abs()];
-                    // SAFETY: as above.
-                    let pb = row.map(|s| unsafe { _mm256_loadu_pd(s.add(j).offset(dx)) });
-                    let d = [0, 1, 2].map(|c| _mm256_sub_pd(pb[c], pa[c]));
-                    let len2 = _mm256_add_pd(
-                        _mm256_add_pd(_mm256_mul_pd(d[0], d[0]), _mm256_mul_pd(d[1], d[1])),
-                        _mm256_mul_pd(d[2], d[2]),
-                    );
-                    // Not proven inside: `!(len2 <= floor)`, true for a NaN too.
-                    let out = _mm256_castpd_si256(_mm256_cmp_pd::<_CMP_NLE_UQ>(len2, floor[t]));
-                    marks = _mm256_or_si256(marks, _mm256_and_si256(out, bit[t]));
-                }
-                let bytes = _mm256_shuffle_epi8(marks, narrow);
-                let low = _mm_cvtsi128_si32(_mm256_castsi256_si128(bytes)) as u32 & 0xffff;
-                let high = _mm_cvtsi128_si32(_mm256_extracti128_si256::<1>(bytes)) as u32 & 0xffff;
-                out[j..j + 4].copy_from_slice(&(low | high << 16).to_le_bytes());
-            }
+/// # Panics
+/// When a partner or an emitter is outside `soa` (never, under the conditions above).
+#[target_feature(enable = "avx2")]
+pub(super) fn marks_row_avx2(
+    _: Avx2,
+    soa: &[Vec<f64>; 3],
+    floor: &[f64; 6],
+    a0: usize,
+    out: &mut [u8],
+) {
+    let nw = out.len();
+    assert!(nw >= 4, "a row of at least one four-lane group");
+    let floor = floor.map(|f| _mm256_set1_pd(f));
+    let bit = [0, 1, 2, 3, 4, 5].map(|t| _mm256_set1_epi64x(1 << t));
+    // Byte 0 of each 64-bit lane to bytes 0 and 1 of its 128-bit half.
+    let narrow = _mm256_setr_epi8(
+        0, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, //
+        0, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
+    );
+    // The three rows (`dy` = 0, -1, -2) of each coordinate as slices of the window, from
+    // `LO[k]` values before the row's first emitter to `HI[k]` after its last: with `j + 4 <=
+    // nw` the compiler finds each load in bounds once the direction loop is unrolled.
+    let mut rows: [[&[f64]; 3]; 3] = [[&[]; 3]; 3];
+    for (k, row) in rows.iter_mut().enumerate() {
+        let start = a0
+            .checked_sub(k * nw + LO[k])
+            .expect("a partner row in the window");
+        for (r, s) in row.iter_mut().zip(soa) {
+            *r = &s[start..][..LO[k] + nw + HI[k]];
         }
-    };
+    }
+    let mut i = 0;
+    while i < nw {
+        let j = i.min(nw - 4);
+        i += 4;
+        let own = rows[0];
+        let at = j + LO[0];
+        let pa = [
+            load4(&own[0][at..]),
+            load4(&own[1][at..]),
+            load4(&own[2][at..]),
+        ];
+        let mut marks = _mm256_setzero_si256();
+        for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
+            let k = dy.unsigned_abs();
+            let (row, at) = (rows[k], (j + LO[k]).wrapping_add_signed(dx));
+            let d = [
+                _mm256_sub_pd(load4(&row[0][at..]), pa[0]),
+                _mm256_sub_pd(load4(&row[1][at..]), pa[1]),
+                _mm256_sub_pd(load4(&row[2][at..]), pa[2]),
+            ];
+            let len2 = _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(d[0], d[0]), _mm256_mul_pd(d[1], d[1])),
+                _mm256_mul_pd(d[2], d[2]),
+            );
+            // Not proven inside: `!(len2 <= floor)`, true for a NaN too.
+            let out = _mm256_castpd_si256(_mm256_cmp_pd::<_CMP_NLE_UQ>(len2, floor[t]));
+            marks = _mm256_or_si256(marks, _mm256_and_si256(out, bit[t]));
+        }
+        let bytes = _mm256_shuffle_epi8(marks, narrow);
+        let low = _mm_cvtsi128_si32(_mm256_castsi256_si128(bytes)) as u32 & 0xffff;
+        let high = _mm_cvtsi128_si32(_mm256_extracti128_si256::<1>(bytes)) as u32 & 0xffff;
+        out[j..j + 4].copy_from_slice(&(low | high << 16).to_le_bytes());
+    }
 }
-
-marks_row!(
-    /// The marks of the `out.len()` springs emitters starting at index `a0` of the window copied
-    /// into `soa`, a row of a grid `out.len()` wide whose direction-`(dx, dy)` partners are at
-    /// `dx + dy out.len()` from them (all negative, at least `-a0`: every partner row is in the
-    /// window), against the direction bounds `floor`.
-    /// `out.len()` must be at least 4; the last group overlaps the one before when it is not a
-    /// multiple of 4, and writes the same bytes again.
-    ///
-    /// # Panics
-    /// When a partner or an emitter is outside `soa` (never, under the conditions above).
-    marks_row_avx2,
-    "avx2"
-);
