@@ -116,7 +116,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
                  not take an animation --out, --every or --stats"
             );
         }
-        return run_study(args, registry, format);
+        return run_study(args, registry, &format);
     }
     if args.every.is_some() && !matches!(format, Format::Animation(_)) {
         anyhow::bail!(
@@ -315,7 +315,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
 
 /// `simulate --vary`: every variant in lockstep, one output per variant beside `--out`, the
 /// summary on stdout; an error naming the variants that stopped, after the others are written.
-fn run_study(args: &Args, registry: &Registry, format: Format) -> anyhow::Result<()> {
+fn run_study(args: &Args, registry: &Registry, format: &Format) -> anyhow::Result<()> {
     let variants = study::variants(
         registry,
         &args.scene,
