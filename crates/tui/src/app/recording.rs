@@ -3,7 +3,7 @@
 //! After each draw the loop hands the screen's cells to [`Recording::frame`], which writes
 //! them as one event: the cursor home, each row's characters with their colours and
 //! attributes as SGR escapes, rows separated by `\r\n`. Event times are wall-clock seconds
-//! since the first drawn frame, so `asciinema play` replays the session at the speed it was
+//! since the first drawn frame, so `asciinema play` replays the screen at the speed it was
 //! seen.
 
 use std::fmt::Write as _;
