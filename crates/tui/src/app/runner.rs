@@ -22,7 +22,7 @@ use ratatui::layout::Rect;
 
 use super::escape::Joiner;
 use super::model::{App, Level, Stats};
-use super::terminal::{self, Session};
+use super::terminal::{self, TerminalGuard};
 use super::{Message, input, panes, update, view};
 
 /// How often the drawing rate refreshes.
@@ -65,13 +65,14 @@ pub fn run(mut app: App, fps: u32) -> anyhow::Result<()> {
     }))?;
     terminal::restore_on_panic();
     let sixteen = app.depth == cloth_render::ColorDepth::Ansi16;
-    let mut session = Session::enter(app.mouse, sixteen).context("cannot set up the terminal")?;
+    let mut guard =
+        TerminalGuard::enter(app.mouse, sixteen).context("cannot set up the terminal")?;
     spawn_input(tx).context("cannot read the keyboard")?;
-    let end = event_loop(&mut session, &mut app, fps, &rx);
+    let end = event_loop(&mut guard, &mut app, fps, &rx);
     // A recording ends with the UI, kept as far as it went.
     let recorded = app.stop_recording();
-    session.leave();
-    drop(session);
+    guard.leave();
+    drop(guard);
     signals.close();
     match recorded {
         Some(Ok(path)) => {
@@ -131,13 +132,13 @@ impl Meter {
 }
 
 fn event_loop(
-    session: &mut Session,
+    guard: &mut TerminalGuard,
     app: &mut App,
     fps: u32,
     rx: &Receiver<Wake>,
 ) -> anyhow::Result<End> {
     let interval = Duration::from_secs_f64(1.0 / f64::from(fps));
-    let size = session.terminal.size()?;
+    let size = guard.terminal.size()?;
     update(
         app,
         Message::Resize {
@@ -176,12 +177,12 @@ fn event_loop(
                 }
                 Wake::Signal(sig) => match signals::meaning(sig) {
                     signals::Meaning::Stop => {
-                        suspend(session)?;
+                        suspend(guard)?;
                         dirty = true;
                         urgent = true;
                     }
                     signals::Meaning::Continue => {
-                        session.resume()?;
+                        guard.resume()?;
                         dirty = true;
                         urgent = true;
                     }
@@ -209,13 +210,13 @@ fn event_loop(
         app.sync();
         if app.suspend {
             app.suspend = false;
-            suspend(session)?;
+            suspend(guard)?;
             dirty = true;
             urgent = true;
         }
         if app.mouse != mouse {
             mouse = app.mouse;
-            session.set_mouse(mouse)?;
+            guard.set_mouse(mouse)?;
         }
         if let Some(w) = &app.worker
             && !w.alive()
@@ -245,17 +246,17 @@ fn event_loop(
         }
 
         if dirty && (urgent || now >= next_draw) {
-            let size = session.terminal.size()?;
+            let size = guard.terminal.size()?;
             panes::prepare(app, Rect::new(0, 0, size.width, size.height));
-            execute!(session.terminal.backend_mut(), BeginSynchronizedUpdate)?;
-            let drawn = session.terminal.draw(|f| view(app, f))?;
+            execute!(guard.terminal.backend_mut(), BeginSynchronizedUpdate)?;
+            let drawn = guard.terminal.draw(|f| view(app, f))?;
             if let Some(r) = app.recording.as_mut()
                 && let Err(e) = r.frame(drawn.buffer, now)
             {
                 app.recording = None;
                 app.say(Level::Error, format!("{e:#}; the recording stopped"));
             }
-            execute!(session.terminal.backend_mut(), EndSynchronizedUpdate)?;
+            execute!(guard.terminal.backend_mut(), EndSynchronizedUpdate)?;
             dirty = false;
             urgent = false;
             meter.draws += 1;
@@ -269,10 +270,10 @@ fn event_loop(
 }
 
 /// Leaves the terminal and stops the process as SIGTSTP would; on `fg`, enters it again.
-fn suspend(session: &mut Session) -> anyhow::Result<()> {
-    session.leave();
+fn suspend(guard: &mut TerminalGuard) -> anyhow::Result<()> {
+    guard.leave();
     signals::stop_self();
-    session
+    guard
         .resume()
         .context("cannot set up the terminal again after a suspend")
 }

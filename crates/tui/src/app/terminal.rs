@@ -1,7 +1,7 @@
-//! The terminal session: raw mode, the alternate screen, a hidden cursor and mouse capture,
+//! The terminal in use: raw mode, the alternate screen, a hidden cursor and mouse capture,
 //! entered and left as one, however the program ends.
 //!
-//! [`Session::leave`] puts the terminal back and is safe to call twice; the session leaves on
+//! [`TerminalGuard::leave`] puts the terminal back and is safe to call twice; the guard leaves on
 //! drop, and a panic hook leaves before the panic message is printed. Signals are the loop's
 //! business ([`super::runner`]): it leaves, then ends or stops the process.
 
@@ -22,7 +22,7 @@ use super::sgr::Sgr16;
 pub type Term = Terminal<CrosstermBackend<Sgr16<io::Stdout>>>;
 
 /// An entered terminal.
-pub struct Session {
+pub struct TerminalGuard {
     /// The ratatui terminal.
     pub terminal: Term,
     mouse: bool,
@@ -57,7 +57,7 @@ fn enter(mouse: bool) -> io::Result<()> {
     Ok(())
 }
 
-impl Session {
+impl TerminalGuard {
     /// Enters the terminal: raw mode, alternate screen, hidden cursor, mouse when `mouse`;
     /// `sixteen` rewrites colours for a 16-colour terminal.
     ///
@@ -122,7 +122,7 @@ impl Session {
     }
 }
 
-impl Drop for Session {
+impl Drop for TerminalGuard {
     fn drop(&mut self) {
         self.leave();
     }
