@@ -53,20 +53,19 @@ pub(crate) const DIRECTIONS: [(isize, isize, SpringKind); 6] = [
     (0, -2, SpringKind::Bending),
 ];
 
-/// The fused pass (`sweep/fused.rs`) when a sweep's rows take it: given the stencil, the scratch,
-/// the parameters, the row `y`, row `y - 2`'s positions, row `y + 1`'s and row `y - 2`'s new
-/// positions, it returns the columns it integrated.
-pub(crate) type Fused<'a> = Option<
-    &'a dyn Fn(
-        &Stencil,
-        &mut RowScratch,
-        &SweepParams,
-        usize,
-        &[Vec3],
-        &[Vec3],
-        &mut [Vec3],
-    ) -> usize,
->;
+/// A row of the fused pass (`sweep/fused.rs`): it emits row `y`'s springs, and sums and
+/// integrates row `y - 2`, whose positions are `positions` and whose new positions go to `next`;
+/// `ahead` is row `y + 1`'s positions (none past the last row).
+pub(crate) struct FusedRow<'a> {
+    y: usize,
+    positions: &'a [Vec3],
+    ahead: &'a [Vec3],
+    next: &'a mut [Vec3],
+}
+
+/// The fused pass of a sweep's build, given the scratch and a row; it returns the columns it
+/// integrated.
+type Fused<'a> = dyn Fn(&mut RowScratch, FusedRow) -> usize + 'a;
 
 /// Zero columns on each side of a row buffer, so a point can read the forces of springs emitted
 /// up to two columns away without bounds tests.
@@ -94,24 +93,19 @@ macro_rules! ring_strides {
         /// Runs the fused pass compiled for the scratch's stride, or the one with the stride a
         /// variable when it is not in [`RING_STRIDES`].
         #[cfg(target_arch = "x86_64")]
-        #[allow(clippy::too_many_arguments)]
         #[target_feature(enable = "avx2")]
         fn fused_pass(
             _: Avx2,
             stencil: &Stencil,
             scratch: &mut RowScratch,
             params: &SweepParams,
-            y: usize,
-            positions: &[Vec3],
-            ahead: &[Vec3],
-            next: &mut [Vec3],
+            row: FusedRow,
         ) -> usize {
             match scratch.stride {
                 $(
-                    $stride => stencil
-                        .emit_sum_integrate_avx2::<$stride>(scratch, params, y, positions, ahead, next),
+                    $stride => stencil.emit_sum_integrate_avx2::<$stride>(scratch, params, row),
                 )+
-                _ => stencil.emit_sum_integrate_avx2::<0>(scratch, params, y, positions, ahead, next),
+                _ => stencil.emit_sum_integrate_avx2::<0>(scratch, params, row),
             }
         }
     };
@@ -315,15 +309,8 @@ impl Stencil {
     ) {
         // NOTE: a closure written here takes this function's target features, so it calls the
         // AVX2 pass without `unsafe`.
-        let fused = |stencil: &Stencil,
-                     scratch: &mut RowScratch,
-                     params: &SweepParams,
-                     y: usize,
-                     positions: &[Vec3],
-                     ahead: &[Vec3],
-                     next: &mut [Vec3]| {
-            fused_pass(avx2, stencil, scratch, params, y, positions, ahead, next)
-        };
+        let fused =
+            |scratch: &mut RowScratch, row: FusedRow| fused_pass(avx2, self, scratch, params, row);
         self.sweep_rows(
             Some(&fused),
             scratch,
@@ -345,7 +332,7 @@ impl Stencil {
     #[inline(always)]
     pub(crate) fn sweep_rows(
         &self,
-        fused: Fused,
+        fused: Option<&Fused<'_>>,
         scratch: &mut RowScratch,
         params: &SweepParams,
         positions: &[Vec3],
@@ -398,7 +385,18 @@ impl Stencil {
                 let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
                 // Columns already integrated by the fused pass.
                 let done = match fused {
-                    Some(fused) if fuse => fused(self, scratch, params, y, positions, ahead, row),
+                    Some(fused) if fuse => {
+                        let next = &mut *row;
+                        fused(
+                            scratch,
+                            FusedRow {
+                                y,
+                                positions,
+                                ahead,
+                                next,
+                            },
+                        )
+                    }
                     _ => {
                         self.sum_row(scratch, params, r);
                         0

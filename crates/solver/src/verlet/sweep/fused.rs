@@ -31,9 +31,9 @@ use std::arch::x86_64::{
 };
 use std::marker::PhantomData;
 
-use cloth_mesh::Vec3;
-
-use super::{DIRECTIONS, PAD, POS_SLOTS, RowScratch, Stencil, SweepParams, valid_columns};
+use super::{
+    DIRECTIONS, FusedRow, PAD, POS_SLOTS, RowScratch, Stencil, SweepParams, valid_columns,
+};
 use crate::simd::{load4, store4};
 
 /// Where the fused pass's streams lie in a buffer: `rows` rows `stride` values apart, each with
@@ -161,18 +161,21 @@ impl Stencil {
     /// positions, overwritten): what [`Stencil::emit_row`], [`Stencil::sum_row`] and
     /// `integrate_row` would write, bit for bit, except that pinned points are integrated like
     /// the others and the columns from the returned one on are not integrated (the caller
-    /// finishes both). `positions` is row `r` of the positions; row `y`'s must be in the ring;
-    /// `y` must be [`Stencil::fusable`].
+    /// finishes both). Row `y`'s positions must be in the ring; `y` must be
+    /// [`Stencil::fusable`].
     #[target_feature(enable = "avx2")]
     pub(super) fn emit_sum_integrate_avx2<const STRIDE: usize>(
         &self,
         scratch: &mut RowScratch,
         params: &SweepParams,
-        y: usize,
-        positions: &[Vec3],
-        ahead: &[Vec3],
-        next: &mut [Vec3],
+        row: FusedRow,
     ) -> usize {
+        let FusedRow {
+            y,
+            positions,
+            ahead,
+            next,
+        } = row;
         // The rings' row stride: `STRIDE`, a constant (see `ring_strides!`), or when 0
         // the scratch's.
         let nw = self.nw;
