@@ -24,17 +24,16 @@
 
 use std::arch::x86_64::{
     __m256d, __m256i, _CMP_EQ_OQ, _mm256_add_epi64, _mm256_add_pd, _mm256_and_pd, _mm256_and_si256,
-    _mm256_andnot_pd, _mm256_blend_pd, _mm256_castsi256_pd, _mm256_cmp_pd, _mm256_cmpgt_epi64,
-    _mm256_div_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_permute2f128_pd, _mm256_set_epi64x,
-    _mm256_set1_epi64x, _mm256_set1_pd, _mm256_setzero_pd, _mm256_shuffle_pd, _mm256_sqrt_pd,
-    _mm256_storeu_pd, _mm256_sub_pd, _mm256_unpackhi_pd, _mm256_unpacklo_pd,
+    _mm256_andnot_pd, _mm256_castsi256_pd, _mm256_cmp_pd, _mm256_cmpgt_epi64, _mm256_div_pd,
+    _mm256_loadu_pd, _mm256_mul_pd, _mm256_set_epi64x, _mm256_set1_epi64x, _mm256_set1_pd,
+    _mm256_setzero_pd, _mm256_sqrt_pd, _mm256_storeu_pd, _mm256_sub_pd,
 };
 use std::marker::PhantomData;
 
 use super::{
     DIRECTIONS, FusedRow, PAD, POS_SLOTS, RowScratch, Stencil, SweepParams, valid_columns,
 };
-use crate::simd::{load4, store4};
+use crate::simd::{deinterleave, interleave, load4, store4};
 
 /// Where the fused pass's streams lie in a buffer: `rows` rows `stride` values apart, each with
 /// `margin` values, then the `nw` columns, then `margin` values again; the pass reads and writes
@@ -254,15 +253,7 @@ impl Stencil {
                     load4(&ahead[at + 4..]),
                     load4(&ahead[at + 8..]),
                 ];
-                let xy_even = _mm256_blend_pd::<0b1100>(m[0], m[1]);
-                let yz = _mm256_blend_pd::<0b1100>(m[1], m[2]);
-                let zx = _mm256_permute2f128_pd::<0x21>(m[0], m[2]);
-                let xy_odd = _mm256_shuffle_pd::<0b0101>(zx, yz);
-                let split = [
-                    _mm256_unpacklo_pd(xy_even, xy_odd),
-                    _mm256_unpackhi_pd(xy_even, xy_odd),
-                    _mm256_blend_pd::<0b1010>(zx, yz),
-                ];
+                let split = deinterleave(m);
                 for (c, v) in split.into_iter().enumerate() {
                     written.store(c, j, v);
                 }
@@ -327,16 +318,7 @@ impl Stencil {
             if integrate {
                 // The four points' forces interleaved as they lie in memory, `x y z x |
                 // y z x y | z x y z`, then Verlet on three vectors of four values each.
-                let [fx, fy, fz] = sums;
-                let xy_even = _mm256_unpacklo_pd(fx, fy);
-                let xy_odd = _mm256_unpackhi_pd(fx, fy);
-                let zx = _mm256_unpacklo_pd(fz, xy_odd);
-                let yz = _mm256_unpackhi_pd(xy_odd, fz);
-                let f = [
-                    _mm256_permute2f128_pd::<0x20>(xy_even, zx),
-                    _mm256_blend_pd::<0b1100>(yz, xy_even),
-                    _mm256_permute2f128_pd::<0x31>(zx, yz),
-                ];
+                let f = interleave(sums);
                 for (q, f) in f.into_iter().enumerate() {
                     let at = 3 * j + 4 * q;
                     let p = load4(&p_flat[at..at + 4]);
