@@ -62,8 +62,7 @@ impl Shape {
     fn new(len: usize, rows: usize, stride: usize, nw: usize, margin: usize) -> Self {
         let needed = (rows.checked_sub(1))
             .and_then(|r| r.checked_mul(stride))
-            .and_then(|v| v.checked_add(nw))
-            .and_then(|v| v.checked_add(2 * margin));
+            .and_then(|v| v.checked_add(nw)?.checked_add(margin)?.checked_add(margin));
         assert!(nw >= 4 && needed.is_some_and(|needed| needed <= len));
         Self {
             rows,
