@@ -463,11 +463,14 @@ mod lanes {
         f.copy_from_slice(bytemuck::cast_slice(&interleave(xyz)));
     }
 
-    /// Four pin flags as lane masks (all ones where pinned).
+    /// The first four pin flags of `pinned` as lane masks (all ones where pinned).
+    ///
+    /// # Panics
+    /// When `pinned` holds fewer than four flags.
     #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) fn pins(pinned: &[bool]) -> __m256d {
-        let bytes: [bool; 4] = pinned.try_into().expect("four pin flags");
+        let bytes = [pinned[0], pinned[1], pinned[2], pinned[3]];
         // A `bool` is the byte 0 or 1.
         let word = i32::from_le_bytes(bytes.map(u8::from));
         let ones = _mm256_cvtepu8_epi64(_mm_cvtsi32_si128(word));
