@@ -45,7 +45,7 @@ use crate::simd::{Avx2, Simd};
 use crate::stretch::StretchBands;
 use crate::{Collider, SolveError, Solver, SpatialHash, StepParams, StepReport, apply_colliders};
 use limit::StretchSweep;
-use sweep::{RowScratch, Stencil, SweepParams};
+use sweep::{Band, RowScratch, Stencil, SweepParams};
 
 /// The order in which the two sequential constraint passes (self-collision and the stretch
 /// limit) visit points and springs.
@@ -306,17 +306,14 @@ fn forces_and_verlet(
     let positions = &state.positions;
     let Some(pool) = pool else {
         scratch.resize_with(1, RowScratch::default);
-        let last = &mut state.last;
-        stencil.sweep(
-            simd,
-            &mut scratch[0],
-            params,
+        let next = &mut state.last;
+        let band = Band {
             positions,
             pinned,
-            last,
-            0,
-            nh,
-        );
+            next,
+            rows: 0..nh,
+        };
+        stencil.sweep(simd, &mut scratch[0], params, band);
         return;
     };
     // Two bands per thread: one thread can take a band of a slower one (the threads may share
@@ -329,10 +326,15 @@ fn forces_and_verlet(
         (state.last.par_chunks_mut(rows * nw))
             .zip(scratch.par_iter_mut())
             .enumerate()
-            .for_each(|(band, (next, scratch))| {
-                let r0 = band * rows;
-                let r1 = (r0 + rows).min(nh);
-                stencil.sweep(simd, scratch, params, positions, pinned, next, r0, r1);
+            .for_each(|(k, (next, scratch))| {
+                let rows = k * rows..((k + 1) * rows).min(nh);
+                let band = Band {
+                    positions,
+                    pinned,
+                    next,
+                    rows,
+                };
+                stencil.sweep(simd, scratch, params, band);
             });
     });
 }
