@@ -35,120 +35,112 @@ use super::{
 };
 use crate::simd::{deinterleave, interleave, load4, store4};
 
-/// Where the fused pass's streams lie in a buffer: `rows` rows `stride` values apart, each with
-/// `margin` values, then the `nw` columns, then `margin` values again; the pass reads and writes
-/// them four columns at a time.
+/// A buffer of the fused pass's streams (`B`: its borrow, shared or mutable), read and written
+/// four columns at a time: `rows` rows `stride` values apart, each with `margin` values, then
+/// the `nw` columns, then `margin` values again.
 ///
 /// NOTE: the pass reads and writes about 80 streams a group of columns. As offsets from a few
 /// base pointers (a constant offset each once the stride is a constant), their tests fold to
 /// the one of the group's column, which the loop's bound already proves; as slices, each
 /// stream would keep a bounds test of its own in the loop, beside the divider's work.
-#[derive(Debug, Clone, Copy)]
-struct Shape {
-    rows: usize,
+#[derive(Debug)]
+struct Rows<B> {
+    /// The buffer's start; written through only when `B` is a mutable borrow.
+    start: *mut f64,
+    /// How many rows.
+    height: usize,
     stride: usize,
     margin: usize,
     /// The last group's first column, `nw - 4`.
     last: usize,
+    borrow: PhantomData<B>,
 }
 
-impl Shape {
-    /// The shape of `rows` rows of `nw` columns in a buffer of `len` values.
+impl<'a> Rows<&'a [f64]> {
+    /// The rows of `values`, to read (see [`Rows::of`]).
+    #[inline(always)]
+    fn new(values: &'a [f64], rows: usize, stride: usize, nw: usize, margin: usize) -> Self {
+        Self::of(
+            values.as_ptr().cast_mut(),
+            values.len(),
+            [rows, stride, nw, margin],
+        )
+    }
+}
+
+impl<'a> Rows<&'a mut [f64]> {
+    /// The rows of `values`, to read and write (see [`Rows::of`]).
+    #[inline(always)]
+    fn new_mut(
+        values: &'a mut [f64],
+        rows: usize,
+        stride: usize,
+        nw: usize,
+        margin: usize,
+    ) -> Self {
+        Self::of(
+            values.as_mut_ptr(),
+            values.len(),
+            [rows, stride, nw, margin],
+        )
+    }
+
+    /// Writes `v` into columns `j..j + 4` of row `row` (see [`Rows::at`]).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn store(&mut self, row: usize, j: usize, v: __m256d) {
+        let at = self.at(row, j, 0);
+        // SAFETY: `at..at + 4` is inside the values borrowed mutably for `'a` (`Rows::at`).
+        #[allow(unsafe_code)]
+        unsafe {
+            _mm256_storeu_pd(self.start.add(at), v);
+        }
+    }
+}
+
+impl<B> Rows<B> {
+    /// The rows of the `len` values borrowed (`B`) from `start`.
     ///
     /// # Panics
-    /// Unless `nw >= 4` and the buffer holds every row: `(rows - 1) stride + nw + 2 margin`
+    /// Unless `nw >= 4` and the values hold every row: `(rows - 1) stride + nw + 2 margin`
     /// values at least.
     #[inline(always)]
-    fn new(len: usize, rows: usize, stride: usize, nw: usize, margin: usize) -> Self {
+    fn of(start: *mut f64, len: usize, [rows, stride, nw, margin]: [usize; 4]) -> Self {
         let needed = (rows.checked_sub(1))
             .and_then(|r| r.checked_mul(stride))
             .and_then(|v| v.checked_add(nw)?.checked_add(margin)?.checked_add(margin));
         assert!(nw >= 4 && needed.is_some_and(|needed| needed <= len));
         Self {
-            rows,
+            start,
+            height: rows,
             stride,
             margin,
             last: nw - 4,
+            borrow: PhantomData,
         }
     }
 
     /// The offset, from the buffer's start, of columns `j + shift..j + shift + 4` of row
-    /// `row`: inside the buffer (see [`Shape::new`]).
+    /// `row`: inside the buffer (see [`Rows::of`]).
     ///
     /// # Panics
     /// Unless `row < rows`, `j <= nw - 4` and `|shift| <= margin`. With the row and shift
     /// constants of the pass and `j` at most `nw - 4`, the compiler drops these tests.
     #[inline(always)]
-    fn at(self, row: usize, j: usize, shift: isize) -> usize {
-        assert!(row < self.rows && j <= self.last && shift.unsigned_abs() <= self.margin);
+    fn at(&self, row: usize, j: usize, shift: isize) -> usize {
+        assert!(row < self.height && j <= self.last && shift.unsigned_abs() <= self.margin);
         (row * self.stride + self.margin + j).wrapping_add_signed(shift)
     }
-}
 
-/// Streams the pass reads (see [`Shape`]).
-#[derive(Debug, Clone, Copy)]
-struct Rows<'a> {
-    /// The buffer's start.
-    start: *const f64,
-    shape: Shape,
-    borrow: PhantomData<&'a [f64]>,
-}
-
-impl<'a> Rows<'a> {
-    /// The rows of `values` (see [`Shape::new`]).
-    #[inline(always)]
-    fn new(values: &'a [f64], rows: usize, stride: usize, nw: usize, margin: usize) -> Self {
-        let shape = Shape::new(values.len(), rows, stride, nw, margin);
-        Self {
-            start: values.as_ptr(),
-            shape,
-            borrow: PhantomData,
-        }
-    }
-
-    /// Columns `j + shift..j + shift + 4` of row `row` (see [`Shape::at`]).
+    /// Columns `j + shift..j + shift + 4` of row `row` (see [`Rows::at`]).
     #[inline]
     #[target_feature(enable = "avx2")]
-    fn load(self, row: usize, j: usize, shift: isize) -> __m256d {
-        let at = self.shape.at(row, j, shift);
-        // SAFETY: `at..at + 4` is inside the values borrowed for `'a` (`Shape::at`).
+    fn load(&self, row: usize, j: usize, shift: isize) -> __m256d {
+        let at = self.at(row, j, shift);
+        // SAFETY: `at..at + 4` is inside the values borrowed from `start` (`Rows::at`).
         #[allow(unsafe_code)]
         unsafe {
             _mm256_loadu_pd(self.start.add(at))
-        }
-    }
-}
-
-/// Streams the pass writes (see [`Shape`]).
-#[derive(Debug)]
-struct RowsMut<'a> {
-    /// The buffer's start.
-    start: *mut f64,
-    shape: Shape,
-    borrow: PhantomData<&'a mut [f64]>,
-}
-
-impl<'a> RowsMut<'a> {
-    /// The rows of `values` (see [`Shape::new`]).
-    #[inline(always)]
-    fn new(values: &'a mut [f64], rows: usize, stride: usize, nw: usize, margin: usize) -> Self {
-        let shape = Shape::new(values.len(), rows, stride, nw, margin);
-        Self {
-            start: values.as_mut_ptr(),
-            shape,
-            borrow: PhantomData,
-        }
-    }
-
-    /// Writes `v` into columns `j..j + 4` of row `row` (see [`Shape::at`]).
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    fn store(&mut self, row: usize, j: usize, v: __m256d) {
-        let at = self.shape.at(row, j, 0);
-        // SAFETY: `at..at + 4` is inside the values borrowed mutably for `'a` (`Shape::at`).
-        #[allow(unsafe_code)]
-        unsafe {
-            _mm256_storeu_pd(self.start.add(at), v);
         }
     }
 }
@@ -189,8 +181,8 @@ impl Stencil {
         let [s2, s1, s0, s3] = slots;
         // Rows y, y - 1 and y - 2: `p[-dy]`.
         let p = [&*s0, &*s1, &*s2].map(|slot| Rows::new(slot, 3, stride, nw, PAD));
-        let mut written = RowsMut::new(s3, 3, stride, nw, PAD);
-        let rest: [Rows; 6] =
+        let mut written = Rows::new_mut(s3, 3, stride, nw, PAD);
+        let rest: [Rows<&[f64]>; 6] =
             std::array::from_fn(|t| Rows::new(&self.rest[t][y * nw..][..nw], 1, nw, nw, 0));
         // Per direction, its valid columns `lo..hi` as `lo - 1` and `hi`, for lane
         // compares.
@@ -217,8 +209,8 @@ impl Stencil {
             Rows::new(fr, 18, stride, nw, PAD),
             Rows::new(fr1, 18, stride, nw, PAD),
         );
-        let mut out = RowsMut::new(own, 18, stride, nw, PAD);
-        let mut total = RowsMut::new(&mut scratch.total, 3, stride, nw, 0);
+        let mut out = Rows::new_mut(own, 18, stride, nw, PAD);
+        let mut total = Rows::new_mut(&mut scratch.total, 3, stride, nw, 0);
 
         // The rows of points as flat `x, y, z` streams of `3 nw` values (`Vec3` is
         // `Pod` through nalgebra's `convert-bytemuck`: three f64s, no padding).
@@ -266,7 +258,7 @@ impl Stencil {
             let av = [0, 1, 2].map(|c| p[0].load(c, j, 0));
             for (t, &(dx, dy, _)) in DIRECTIONS.iter().enumerate() {
                 // Row `y + dy`, shifted by `dx`.
-                let row = p[dy.unsigned_abs()];
+                let row = &p[dy.unsigned_abs()];
                 let d = [0, 1, 2].map(|c| _mm256_sub_pd(row.load(c, j, dx), av[c]));
                 let len2 = _mm256_add_pd(
                     _mm256_add_pd(_mm256_mul_pd(d[0], d[0]), _mm256_mul_pd(d[1], d[1])),
@@ -301,11 +293,11 @@ impl Stencil {
                 // The springs row r is the far end of, in the sum's order (see `sum_row`):
                 // `(slot, row, shift)`.
                 let far = [
-                    (fr, term(0, c), 1),
-                    (fr, term(4, c), 2),
-                    (fr1, term(3, c), -1),
-                    (fr1, term(1, c), 0),
-                    (fr1, term(2, c), 1),
+                    (&fr, term(0, c), 1),
+                    (&fr, term(4, c), 2),
+                    (&fr1, term(3, c), -1),
+                    (&fr1, term(1, c), 0),
+                    (&fr1, term(2, c), 1),
                 ];
                 for (slot, row, shift) in far {
                     sum = _mm256_sub_pd(sum, slot.load(row, j, shift));
