@@ -12,8 +12,6 @@
 //! entry's list before the constructor sees them, so an unknown key, a wrong type or a value
 //! out of range is an [`OptionError`] naming the solver, the key and what is allowed.
 
-use std::fmt;
-
 use cloth_mesh::ClothMesh;
 use serde_json::{Map, Value};
 
@@ -192,7 +190,7 @@ pub fn default_memory_estimate(mesh: &ClothMesh) -> u64 {
 /// );
 /// # Ok::<(), String>(())
 /// ```
-#[derive(Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 pub struct SolverEntry {
     name: &'static str,
     description: &'static str,
@@ -201,19 +199,6 @@ pub struct SolverEntry {
     explicit: bool,
     build: BuildSolver,
     memory: Option<EstimateMemory>,
-}
-
-impl fmt::Debug for SolverEntry {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("SolverEntry")
-            .field("name", &self.name)
-            .field("description", &self.description)
-            .field("steps_per_frame", &self.steps_per_frame)
-            .field("options", &self.options)
-            .field("explicit", &self.explicit)
-            .field("states_its_memory", &self.memory.is_some())
-            .finish_non_exhaustive()
-    }
 }
 
 impl SolverEntry {

@@ -39,7 +39,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use cloth_mesh::{ClothMesh, ClothState, Vec3};
 use rayon::prelude::*;
 
-use crate::params::MAX_STRETCH;
+use crate::MAX_STRETCH;
 use crate::self_collision::PARALLEL_CHUNK;
 use crate::simd::{Avx2, Simd};
 use crate::stretch::StretchBands;
