@@ -40,9 +40,9 @@ use crate::simd::{deinterleave, interleave, load4, store4};
 /// the `nw` columns, then `margin` values again.
 ///
 /// NOTE: the pass reads and writes about 80 streams a group of columns. As offsets from a few
-/// base pointers (a constant offset each once the stride is a constant), their tests fold to
-/// the one of the group's column, which the loop's bound already proves; as slices, each
-/// stream would keep a bounds test of its own in the loop, beside the divider's work.
+/// base pointers (a constant offset each once the stride is a constant), their tests are the
+/// one of the group's column, the same for every stream; as slices, each stream would keep a
+/// bounds test of its own in the loop, beside the divider's work.
 #[derive(Debug)]
 struct Rows<B> {
     /// The buffer's start; written through only when `B` is a mutable borrow.
@@ -124,8 +124,8 @@ impl<B> Rows<B> {
     /// `row`: inside the buffer (see [`Rows::of`]).
     ///
     /// # Panics
-    /// Unless `row < rows`, `j <= nw - 4` and `|shift| <= margin`. With the row and shift
-    /// constants of the pass and `j` at most `nw - 4`, the compiler drops these tests.
+    /// Unless `row < rows`, `j <= nw - 4` and `|shift| <= margin`. The row and shift are
+    /// constants of the pass's unrolled loops, so only the test of `j` stays.
     #[inline(always)]
     fn at(&self, row: usize, j: usize, shift: isize) -> usize {
         assert!(row < self.height && j <= self.last && shift.unsigned_abs() <= self.margin);
