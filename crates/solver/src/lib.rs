@@ -32,11 +32,6 @@ mod testing;
 #[cfg(test)]
 pub(crate) use cloth_bench::pinned_grid;
 
-/// The parameter constants under their old module path, for the solver's own modules.
-mod params {
-    pub(crate) use cloth_mesh::MAX_STRETCH;
-}
-
 // NOTE: the world's data (colliders, parameters) lives in cloth-mesh, below every solver, so
 // scene files and renderers need no solver crate; it is re-exported here so that a solver
 // written against this crate finds everything it needs in one place.

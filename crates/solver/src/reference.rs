@@ -22,7 +22,7 @@ use std::collections::HashMap;
 
 use cloth_mesh::{ClothMesh, ClothState, Vec3};
 
-use crate::params::MAX_STRETCH;
+use crate::MAX_STRETCH;
 use crate::{Collider, SolveError, SpatialHash, StepParams};
 
 /// Advances `state` by one step of `params.dt()` seconds, exactly as the course's step does.

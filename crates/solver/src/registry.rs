@@ -12,8 +12,6 @@
 //! entry's list before the constructor sees them, so an unknown key, a wrong type or a value
 //! out of range is an [`OptionError`] naming the solver, the key and what is allowed.
 
-use std::fmt;
-
 use cloth_mesh::ClothMesh;
 use serde_json::{Map, Value};
 
@@ -192,7 +190,7 @@ pub fn default_memory_estimate(mesh: &ClothMesh) -> u64 {
 /// );
 /// # Ok::<(), String>(())
 /// ```
-#[derive(Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 pub struct SolverEntry {
     name: &'static str,
     description: &'static str,
@@ -201,19 +199,6 @@ pub struct SolverEntry {
     explicit: bool,
     build: BuildSolver,
     memory: Option<EstimateMemory>,
-}
-
-impl fmt::Debug for SolverEntry {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("SolverEntry")
-            .field("name", &self.name)
-            .field("description", &self.description)
-            .field("steps_per_frame", &self.steps_per_frame)
-            .field("options", &self.options)
-            .field("explicit", &self.explicit)
-            .field("states_its_memory", &self.memory.is_some())
-            .finish_non_exhaustive()
-    }
 }
 
 impl SolverEntry {
@@ -373,19 +358,14 @@ impl SolverEntry {
     /// # Errors
     /// [`OptionError`] when the solver has no integer option `key` or the value is not allowed.
     pub fn integer(&self, options: &Value, key: &str) -> Result<i64, OptionError> {
-        let option = self.typed(key, "an integer")?;
-        let OptionKind::Integer { default, .. } = option.kind else {
-            return Err(self.not_declared(key, "an integer"));
-        };
-        match self.object(options)?.get(key) {
-            None | Some(Value::Null) => Ok(default),
-            Some(v) => {
-                option.check(self.name, v)?;
-                Ok(v.as_i64()
+        self.read(options, key, "an integer", |kind, v| match kind {
+            OptionKind::Integer { default, .. } => Some(v.map_or(default, |v| {
+                v.as_i64()
                     .or_else(|| v.as_f64().map(|f| f as i64))
-                    .unwrap_or(default))
-            }
-        }
+                    .unwrap_or(default)
+            })),
+            _ => None,
+        })
     }
 
     /// The number option `key` from `options`, or its default when absent.
@@ -393,17 +373,12 @@ impl SolverEntry {
     /// # Errors
     /// [`OptionError`] when the solver has no number option `key` or the value is not allowed.
     pub fn number(&self, options: &Value, key: &str) -> Result<f64, OptionError> {
-        let option = self.typed(key, "a number")?;
-        let OptionKind::Number { default, .. } = option.kind else {
-            return Err(self.not_declared(key, "a number"));
-        };
-        match self.object(options)?.get(key) {
-            None | Some(Value::Null) => Ok(default),
-            Some(v) => {
-                option.check(self.name, v)?;
-                Ok(v.as_f64().unwrap_or(default))
+        self.read(options, key, "a number", |kind, v| match kind {
+            OptionKind::Number { default, .. } => {
+                Some(v.and_then(Value::as_f64).unwrap_or(default))
             }
-        }
+            _ => None,
+        })
     }
 
     /// The choice option `key` from `options`, or its default when absent.
@@ -411,25 +386,34 @@ impl SolverEntry {
     /// # Errors
     /// [`OptionError`] when the solver has no choice option `key` or the value is not allowed.
     pub fn choice(&self, options: &Value, key: &str) -> Result<&'static str, OptionError> {
-        let option = self.typed(key, "a choice")?;
-        let OptionKind::Choice { choices, default } = option.kind else {
-            return Err(self.not_declared(key, "a choice"));
-        };
-        match self.object(options)?.get(key) {
-            None | Some(Value::Null) => Ok(default),
-            Some(v) => {
-                option.check(self.name, v)?;
-                Ok(choices
-                    .iter()
-                    .copied()
-                    .find(|c| Some(*c) == v.as_str())
-                    .unwrap_or(default))
-            }
-        }
+        self.read(options, key, "a choice", |kind, v| match kind {
+            OptionKind::Choice { choices, default } => Some(
+                (choices.iter().copied())
+                    .find(|c| v.and_then(Value::as_str) == Some(*c))
+                    .unwrap_or(default),
+            ),
+            _ => None,
+        })
     }
 
-    fn typed(&self, key: &str, what: &'static str) -> Result<&'static SolverOption, OptionError> {
-        self.option(key).ok_or_else(|| self.not_declared(key, what))
+    /// Option `key` (`what`: its kind, for the error) from `options`, checked, as `pick` reads
+    /// it from the option's kind and the value given (`None`: absent); `pick` answers `None`
+    /// when the option is of another kind.
+    fn read<T>(
+        &self,
+        options: &Value,
+        key: &str,
+        what: &'static str,
+        pick: impl Fn(OptionKind, Option<&Value>) -> Option<T>,
+    ) -> Result<T, OptionError> {
+        let not_declared = || self.not_declared(key, what);
+        let option = self.option(key).ok_or_else(not_declared)?;
+        pick(option.kind, None).ok_or_else(not_declared)?;
+        let value = self.object(options)?.get(key).filter(|v| !v.is_null());
+        if let Some(v) = value {
+            option.check(self.name, v)?;
+        }
+        pick(option.kind, value).ok_or_else(not_declared)
     }
 
     fn not_declared(&self, key: &str, what: &'static str) -> OptionError {

@@ -43,6 +43,9 @@ impl Default for Simd {
     }
 }
 
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::{__m256d, _mm256_blend_pd, _mm256_permute2f128_pd, _mm256_shuffle_pd};
+
 /// The first four values of `values` as an AVX register: the vector passes' load, bounds
 /// checked, with no `unsafe`.
 ///
@@ -51,7 +54,7 @@ impl Default for Simd {
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-pub(crate) fn load4(values: &[f64]) -> std::arch::x86_64::__m256d {
+pub(crate) fn load4(values: &[f64]) -> __m256d {
     bytemuck::pod_read_unaligned(bytemuck::cast_slice(&values[..4]))
 }
 
@@ -62,6 +65,36 @@ pub(crate) fn load4(values: &[f64]) -> std::arch::x86_64::__m256d {
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx2")]
-pub(crate) fn store4(values: &mut [f64], v: std::arch::x86_64::__m256d) {
+pub(crate) fn store4(values: &mut [f64], v: __m256d) {
     values[..4].copy_from_slice(bytemuck::cast_slice(&[v]));
+}
+
+/// The x, y and z lanes of four points stored as `x y z x | y z x y | z x y z` in `m`.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+pub(crate) fn deinterleave(m: [__m256d; 3]) -> [__m256d; 3] {
+    let xy = _mm256_blend_pd::<0b1100>(m[0], m[1]); // x0 y0 x2 y2
+    let zx = _mm256_permute2f128_pd::<0x21>(m[0], m[2]); // z0 x1 z2 x3
+    let yz = _mm256_blend_pd::<0b1100>(m[1], m[2]); // y1 z1 y3 z3
+    [
+        _mm256_blend_pd::<0b1010>(xy, zx),
+        _mm256_shuffle_pd::<0b0101>(xy, yz),
+        _mm256_blend_pd::<0b1010>(zx, yz),
+    ]
+}
+
+/// [`deinterleave`]'s inverse: four points' x, y and z lanes as they lie in memory.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx2")]
+pub(crate) fn interleave([x, y, z]: [__m256d; 3]) -> [__m256d; 3] {
+    let xy = _mm256_shuffle_pd::<0b0000>(x, y); // x0 y0 x2 y2
+    let yz = _mm256_shuffle_pd::<0b1111>(y, z); // y1 z1 y3 z3
+    let zx = _mm256_blend_pd::<0b1010>(z, x); // z0 x1 z2 x3
+    [
+        _mm256_permute2f128_pd::<0x20>(xy, zx),
+        _mm256_blend_pd::<0b1100>(yz, xy),
+        _mm256_permute2f128_pd::<0x31>(zx, yz),
+    ]
 }

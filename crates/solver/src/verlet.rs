@@ -39,16 +39,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use cloth_mesh::{ClothMesh, ClothState, Vec3};
 use rayon::prelude::*;
 
-use crate::params::MAX_STRETCH;
+use crate::MAX_STRETCH;
 use crate::self_collision::PARALLEL_CHUNK;
 use crate::simd::{Avx2, Simd};
 use crate::stretch::StretchBands;
-use crate::{
-    Collider, SolveError, Solver, SpatialHash, StepParams, StepReport, apply_colliders,
-    limit_stretch,
-};
+use crate::{Collider, SolveError, Solver, SpatialHash, StepParams, StepReport, apply_colliders};
 use limit::StretchSweep;
-use sweep::{RowScratch, Stencil, SweepParams};
+use sweep::{Band, RowScratch, Stencil, SweepParams};
 
 /// The order in which the two sequential constraint passes (self-collision and the stretch
 /// limit) visit points and springs.
@@ -167,60 +164,6 @@ impl Verlet {
             + StretchSweep::bytes_for(nw, nh, order)
             + SpatialHash::memory_estimate(n, threads)
     }
-
-    /// Steps 1 and 2: forces and the Verlet update, leaving the new positions in `state.last`
-    /// and the old ones in `state.positions` (the caller swaps them).
-    fn forces_and_verlet(
-        &mut self,
-        mesh: &ClothMesh,
-        params: &SweepParams,
-        state: &mut ClothState,
-    ) {
-        let Some(stencil) = self.stencil.as_ref() else {
-            return;
-        };
-        let (nw, nh) = (stencil.nw(), stencil.nh());
-        let simd = self.simd;
-        let positions = &state.positions;
-        let pinned = mesh.pinned();
-        match &self.pool {
-            None => {
-                self.scratch.resize_with(1, RowScratch::default);
-                stencil.sweep(
-                    simd,
-                    &mut self.scratch[0],
-                    params,
-                    positions,
-                    pinned,
-                    &mut state.last,
-                    0,
-                    nh,
-                );
-            }
-            Some(pool) => {
-                // Two bands per thread: one thread can take a band of a slower one (the threads
-                // may share their cores with other processes), while each band's first two
-                // rows, emitted again by the band after, stay few.
-                let bands = (2 * pool.current_num_threads()).min(nh);
-                let rows = nh.div_ceil(bands);
-                self.scratch
-                    .resize_with(nh.div_ceil(rows), RowScratch::default);
-                let scratch = &mut self.scratch;
-                pool.install(|| {
-                    state
-                        .last
-                        .par_chunks_mut(rows * nw)
-                        .zip(scratch.par_iter_mut())
-                        .enumerate()
-                        .for_each(|(band, (next, scratch))| {
-                            let r0 = band * rows;
-                            let r1 = (r0 + rows).min(nh);
-                            stencil.sweep(simd, scratch, params, positions, pinned, next, r0, r1);
-                        });
-                });
-            }
-        }
-    }
 }
 
 impl Solver for Verlet {
@@ -277,26 +220,34 @@ impl Verlet {
         // 1 and 2. Forces and damped Verlet. The sweep writes the new positions over the last
         // ones; swapping the arrays makes the old positions the new last ones. Pinned points
         // keep their last position too, as in the course.
-        if !self.stencil.as_ref().is_some_and(|s| s.matches(mesh)) {
-            self.stencil = Some(Stencil::new(mesh)?);
-            self.bands = StretchBands::new(mesh);
-            if let Some(stencil) = &self.stencil {
-                self.stretch = StretchSweep::new(stencil, MAX_STRETCH, simd);
+        let stencil = match self.stencil.take() {
+            Some(stencil) if stencil.matches(mesh) => stencil,
+            _ => {
+                let stencil = Stencil::new(mesh)?;
+                self.bands = StretchBands::new(mesh);
+                self.stretch = StretchSweep::new(&stencil, MAX_STRETCH, simd);
+                stencil
             }
-        }
-        let pins: &[usize] = self.stencil.as_ref().map_or(&[], |s| &s.pins);
+        };
+        let stencil = &*self.stencil.insert(stencil);
         self.pinned_last.clear();
-        self.pinned_last.extend(pins.iter().map(|&i| state.last[i]));
-        self.forces_and_verlet(mesh, &sweep, state);
+        self.pinned_last
+            .extend(stencil.pins.iter().map(|&i| state.last[i]));
+        let (pool, pinned) = (self.pool.as_deref(), mesh.pinned());
+        forces_and_verlet(
+            stencil,
+            pool,
+            &mut self.scratch,
+            simd,
+            pinned,
+            &sweep,
+            state,
+        );
         std::mem::swap(&mut state.positions, &mut state.last);
-        let pins: &[usize] = self.stencil.as_ref().map_or(&[], |s| &s.pins);
-        for (&i, l) in pins.iter().zip(&self.pinned_last) {
+        for (&i, l) in stencil.pins.iter().zip(&self.pinned_last) {
             state.last[i] = *l;
         }
         let positions = &mut state.positions;
-
-        let parallel = self.order == ConstraintOrder::Parallel;
-        let pool = self.pool.as_deref();
 
         // 3. Self-collision.
         if params.self_collision {
@@ -305,20 +256,20 @@ impl Verlet {
         }
 
         // 4. Collision objects.
-        apply_colliders(colliders, mesh.pinned(), positions, &state.last);
+        apply_colliders(colliders, pinned, positions, &state.last);
 
         // 5. Stretch limit.
         if params.stretch_limit {
-            if let (ConstraintOrder::Colored, Some(stencil)) = (self.order, &self.stencil) {
-                colored::limit_colored(stencil, mesh.pinned(), positions, MAX_STRETCH, pool, simd);
-            } else if let (true, Some(stencil)) = (parallel, &self.stencil) {
-                let bands = &self.bands;
-                self.stretch
-                    .limit_bands(stencil, bands, mesh.pinned(), positions, pool);
-            } else if let Some(stencil) = &self.stencil {
-                self.stretch.limit(stencil, mesh.pinned(), positions);
-            } else {
-                limit_stretch(mesh.springs(), mesh.pinned(), positions, MAX_STRETCH);
+            match self.order {
+                ConstraintOrder::Colored => {
+                    colored::limit_colored(stencil, pinned, positions, MAX_STRETCH, pool, simd);
+                }
+                ConstraintOrder::Parallel => {
+                    let bands = &self.bands;
+                    self.stretch
+                        .limit_bands(stencil, bands, pinned, positions, pool);
+                }
+                ConstraintOrder::Faithful => self.stretch.limit(stencil, pinned, positions),
             }
         }
 
@@ -328,13 +279,7 @@ impl Verlet {
         // finite (collisions and corrections add to it or compute from it); a pinned point's
         // last position is only ever kept. So this passes exactly when both arrays are finite,
         // for half the reads.
-        let last_finite = match &self.stencil {
-            Some(stencil) => stencil
-                .pins
-                .iter()
-                .all(|&i| all_finite(simd, &state.last[i..=i])),
-            None => all_finite(simd, &state.last),
-        };
+        let last_finite = (stencil.pins.iter()).all(|&i| all_finite(simd, &state.last[i..=i]));
         if last_finite && finite_on(simd, &state.positions, pool) {
             return Ok(StepReport::default());
         }
@@ -343,6 +288,55 @@ impl Verlet {
             None => Ok(StepReport::default()),
         }
     }
+}
+
+/// Steps 1 and 2: forces and the Verlet update, on `pool`'s threads when there is one, leaving
+/// the new positions in `state.last` and the old ones in `state.positions` (the caller swaps
+/// them).
+fn forces_and_verlet(
+    stencil: &Stencil,
+    pool: Option<&rayon::ThreadPool>,
+    scratch: &mut Vec<RowScratch>,
+    simd: Simd,
+    pinned: &[bool],
+    params: &SweepParams,
+    state: &mut ClothState,
+) {
+    let (nw, nh) = (stencil.nw(), stencil.nh());
+    let positions = &state.positions;
+    let Some(pool) = pool else {
+        scratch.resize_with(1, RowScratch::default);
+        let next = &mut state.last;
+        let band = Band {
+            positions,
+            pinned,
+            next,
+            rows: 0..nh,
+        };
+        stencil.sweep(simd, &mut scratch[0], params, band);
+        return;
+    };
+    // Two bands per thread: one thread can take a band of a slower one (the threads may share
+    // their cores with other processes), while each band's first two rows, emitted again by
+    // the band after, stay few.
+    let bands = (2 * pool.current_num_threads()).min(nh);
+    let rows = nh.div_ceil(bands);
+    scratch.resize_with(nh.div_ceil(rows), RowScratch::default);
+    pool.install(|| {
+        (state.last.par_chunks_mut(rows * nw))
+            .zip(scratch.par_iter_mut())
+            .enumerate()
+            .for_each(|(k, (next, scratch))| {
+                let rows = k * rows..((k + 1) * rows).min(nh);
+                let band = Band {
+                    positions,
+                    pinned,
+                    next,
+                    rows,
+                };
+                stencil.sweep(simd, scratch, params, band);
+            });
+    });
 }
 
 /// Sets its flag when dropped.

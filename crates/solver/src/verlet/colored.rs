@@ -420,14 +420,15 @@ fn correct(
 #[cfg(target_arch = "x86_64")]
 mod lanes {
     use std::arch::x86_64::{
-        __m256d, _mm_cvtsi32_si128, _mm256_blend_pd, _mm256_castsi256_pd, _mm256_cvtepu8_epi64,
-        _mm256_permute2f128_pd, _mm256_setzero_si256, _mm256_shuffle_pd, _mm256_sub_epi64,
-        _mm256_unpackhi_pd, _mm256_unpacklo_pd,
+        __m256d, _mm_cvtsi32_si128, _mm256_castsi256_pd, _mm256_cvtepu8_epi64,
+        _mm256_permute2f128_pd, _mm256_setzero_si256, _mm256_sub_epi64, _mm256_unpackhi_pd,
+        _mm256_unpacklo_pd,
     };
 
     use cloth_mesh::Vec3;
 
     pub(super) use crate::simd::load4;
+    use crate::simd::{deinterleave, interleave};
 
     /// The x, y and z lanes of four points.
     pub(super) type Xyz = [__m256d; 3];
@@ -448,16 +449,7 @@ mod lanes {
     pub(super) fn load(points: &[Vec3]) -> Xyz {
         // Four points are 12 f64s (`Vec3` is `Pod`: three f64s, no padding).
         let f: &[f64] = bytemuck::cast_slice(&points[..4]);
-        // m0 = x0 y0 z0 x1, m1 = y1 z1 x2 y2, m2 = z2 x3 y3 z3.
-        let (m0, m1, m2) = (load4(&f[..4]), load4(&f[4..8]), load4(&f[8..]));
-        let xy = _mm256_blend_pd(m0, m1, 0b1100); // x0 y0 x2 y2
-        let zx = _mm256_permute2f128_pd(m0, m2, 0x21); // z0 x1 z2 x3
-        let yz = _mm256_blend_pd(m1, m2, 0b1100); // y1 z1 y3 z3
-        [
-            _mm256_blend_pd(xy, zx, 0b1010),
-            _mm256_shuffle_pd(xy, yz, 0b0101),
-            _mm256_blend_pd(zx, yz, 0b1010),
-        ]
+        deinterleave([load4(&f[..4]), load4(&f[4..8]), load4(&f[8..])])
     }
 
     /// Writes lanes back as the first four points of `points` ([`load`]'s inverse).
@@ -466,24 +458,19 @@ mod lanes {
     /// When `points` holds fewer than four points.
     #[inline]
     #[target_feature(enable = "avx2")]
-    pub(super) fn store(points: &mut [Vec3], [x, y, z]: Xyz) {
+    pub(super) fn store(points: &mut [Vec3], xyz: Xyz) {
         let f: &mut [f64] = bytemuck::cast_slice_mut(&mut points[..4]);
-        let xy = _mm256_shuffle_pd(x, y, 0b0000); // x0 y0 x2 y2
-        let yz = _mm256_shuffle_pd(y, z, 0b1111); // y1 z1 y3 z3
-        let zx = _mm256_blend_pd(z, x, 0b1010); // z0 x1 z2 x3
-        let m = [
-            _mm256_permute2f128_pd(xy, zx, 0x20),
-            _mm256_blend_pd(yz, xy, 0b1100),
-            _mm256_permute2f128_pd(zx, yz, 0x31),
-        ];
-        f.copy_from_slice(bytemuck::cast_slice(&m));
+        f.copy_from_slice(bytemuck::cast_slice(&interleave(xyz)));
     }
 
-    /// Four pin flags as lane masks (all ones where pinned).
+    /// The first four pin flags of `pinned` as lane masks (all ones where pinned).
+    ///
+    /// # Panics
+    /// When `pinned` holds fewer than four flags.
     #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) fn pins(pinned: &[bool]) -> __m256d {
-        let bytes: [bool; 4] = pinned.try_into().expect("four pin flags");
+        let bytes = [pinned[0], pinned[1], pinned[2], pinned[3]];
         // A `bool` is the byte 0 or 1.
         let word = i32::from_le_bytes(bytes.map(u8::from));
         let ones = _mm256_cvtepu8_epi64(_mm_cvtsi32_si128(word));

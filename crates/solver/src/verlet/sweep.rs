@@ -53,20 +53,29 @@ pub(crate) const DIRECTIONS: [(isize, isize, SpringKind); 6] = [
     (0, -2, SpringKind::Bending),
 ];
 
-/// The fused pass (`sweep/fused.rs`) when a sweep's rows take it: given the stencil, the scratch,
-/// the parameters, the row `y`, row `y - 2`'s positions, row `y + 1`'s and row `y - 2`'s new
-/// positions, it returns the columns it integrated.
-pub(crate) type Fused<'a> = Option<
-    &'a dyn Fn(
-        &Stencil,
-        &mut RowScratch,
-        &SweepParams,
-        usize,
-        &[Vec3],
-        &[Vec3],
-        &mut [Vec3],
-    ) -> usize,
->;
+/// The rows `rows` of a sweep: it reads the old `positions` (all rows), the `pinned` flags
+/// (all rows) and the last positions of its rows (in `next`), and writes each new position into
+/// `next` (pinned points keep theirs).
+pub(crate) struct Band<'a> {
+    pub(crate) positions: &'a [Vec3],
+    pub(crate) pinned: &'a [bool],
+    pub(crate) next: &'a mut [Vec3],
+    pub(crate) rows: std::ops::Range<usize>,
+}
+
+/// A row of the fused pass (`sweep/fused.rs`): it emits row `y`'s springs, and sums and
+/// integrates row `y - 2`, whose positions are `positions` and whose new positions go to `next`;
+/// `ahead` is row `y + 1`'s positions (none past the last row).
+pub(crate) struct FusedRow<'a> {
+    y: usize,
+    positions: &'a [Vec3],
+    ahead: &'a [Vec3],
+    next: &'a mut [Vec3],
+}
+
+/// The fused pass of a sweep's build, given the scratch and a row; it returns the columns it
+/// integrated.
+type Fused<'a> = dyn Fn(&mut RowScratch, FusedRow) -> usize + 'a;
 
 /// Zero columns on each side of a row buffer, so a point can read the forces of springs emitted
 /// up to two columns away without bounds tests.
@@ -94,24 +103,19 @@ macro_rules! ring_strides {
         /// Runs the fused pass compiled for the scratch's stride, or the one with the stride a
         /// variable when it is not in [`RING_STRIDES`].
         #[cfg(target_arch = "x86_64")]
-        #[allow(clippy::too_many_arguments)]
         #[target_feature(enable = "avx2")]
         fn fused_pass(
             _: Avx2,
             stencil: &Stencil,
             scratch: &mut RowScratch,
             params: &SweepParams,
-            y: usize,
-            positions: &[Vec3],
-            ahead: &[Vec3],
-            next: &mut [Vec3],
+            row: FusedRow,
         ) -> usize {
             match scratch.stride {
                 $(
-                    $stride => stencil
-                        .emit_sum_integrate_avx2::<$stride>(scratch, params, y, positions, ahead, next),
+                    $stride => stencil.emit_sum_integrate_avx2::<$stride>(scratch, params, row),
                 )+
-                _ => stencil.emit_sum_integrate_avx2::<0>(scratch, params, y, positions, ahead, next),
+                _ => stencil.emit_sum_integrate_avx2::<0>(scratch, params, row),
             }
         }
     };
@@ -262,34 +266,27 @@ impl Stencil {
         &self.rest[t]
     }
 
-    /// Forces and the damped Verlet update for rows `r0..r1`: reads the old `positions` (all
-    /// rows) and `last` (rows `r0..r1`, in `next`), and writes each new position into `next`
-    /// (pinned points keep theirs).
+    /// Forces and the damped Verlet update for `band`'s rows (see [`Band`]).
     ///
     /// Runs the AVX2 build of the sweep, with the fused pass, when `simd` has AVX2 (see
     /// [`Stencil::sweep_avx2`]).
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn sweep(
         &self,
         simd: Simd,
         scratch: &mut RowScratch,
         params: &SweepParams,
-        positions: &[Vec3],
-        pinned: &[bool],
-        next: &mut [Vec3],
-        r0: usize,
-        r1: usize,
+        band: Band,
     ) {
         #[cfg(target_arch = "x86_64")]
         if let Some(avx2) = simd.avx2() {
             // SAFETY: the CPU runs AVX2: an `Avx2` exists.
             #[allow(unsafe_code)]
             unsafe {
-                self.sweep_avx2(avx2, scratch, params, positions, pinned, next, r0, r1);
+                self.sweep_avx2(avx2, scratch, params, band);
             }
             return;
         }
-        self.sweep_rows(None, scratch, params, positions, pinned, next, r0, r1);
+        self.sweep_rows(None, scratch, params, band);
     }
 
     /// The sweep compiled for AVX2: four f64 lanes per instruction instead of baseline
@@ -300,40 +297,13 @@ impl Stencil {
     /// reassociates float operations, so every lane does the same IEEE operations in the same
     /// order as the portable build: the results are bit-identical (tested below).
     #[cfg(target_arch = "x86_64")]
-    #[allow(clippy::too_many_arguments)]
     #[target_feature(enable = "avx2")]
-    fn sweep_avx2(
-        &self,
-        avx2: Avx2,
-        scratch: &mut RowScratch,
-        params: &SweepParams,
-        positions: &[Vec3],
-        pinned: &[bool],
-        next: &mut [Vec3],
-        r0: usize,
-        r1: usize,
-    ) {
+    fn sweep_avx2(&self, avx2: Avx2, scratch: &mut RowScratch, params: &SweepParams, band: Band) {
         // NOTE: a closure written here takes this function's target features, so it calls the
         // AVX2 pass without `unsafe`.
-        let fused = |stencil: &Stencil,
-                     scratch: &mut RowScratch,
-                     params: &SweepParams,
-                     y: usize,
-                     positions: &[Vec3],
-                     ahead: &[Vec3],
-                     next: &mut [Vec3]| {
-            fused_pass(avx2, stencil, scratch, params, y, positions, ahead, next)
-        };
-        self.sweep_rows(
-            Some(&fused),
-            scratch,
-            params,
-            positions,
-            pinned,
-            next,
-            r0,
-            r1,
-        );
+        let fused =
+            |scratch: &mut RowScratch, row: FusedRow| fused_pass(avx2, self, scratch, params, row);
+        self.sweep_rows(Some(&fused), scratch, params, band);
     }
 
     /// The sweep itself, for whatever instruction set the caller was compiled for: everything
@@ -341,19 +311,20 @@ impl Stencil {
     /// no fused pass it is the portable sweep; otherwise the rows that can take it emit their
     /// springs, and sum and integrate two rows behind, in one pass of the given build
     /// (`fused`).
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(crate) fn sweep_rows(
         &self,
-        fused: Fused,
+        fused: Option<&Fused<'_>>,
         scratch: &mut RowScratch,
         params: &SweepParams,
-        positions: &[Vec3],
-        pinned: &[bool],
-        next: &mut [Vec3],
-        r0: usize,
-        r1: usize,
+        band: Band,
     ) {
+        let Band {
+            positions,
+            pinned,
+            next,
+            rows: std::ops::Range { start: r0, end: r1 },
+        } = band;
         let (nw, nh) = (self.nw, self.nh);
         let stride = ring_stride(nw);
         scratch.pos.resize(POS_SLOTS * 3 * stride, 0.0);
@@ -398,7 +369,18 @@ impl Stencil {
                 let (positions, pinned) = (&positions[r * nw..][..nw], &pinned[r * nw..][..nw]);
                 // Columns already integrated by the fused pass.
                 let done = match fused {
-                    Some(fused) if fuse => fused(self, scratch, params, y, positions, ahead, row),
+                    Some(fused) if fuse => {
+                        let next = &mut *row;
+                        fused(
+                            scratch,
+                            FusedRow {
+                                y,
+                                positions,
+                                ahead,
+                                next,
+                            },
+                        )
+                    }
                     _ => {
                         self.sum_row(scratch, params, r);
                         0
@@ -639,28 +621,25 @@ mod tests {
         let band = rows.start * nw..rows.end * nw;
         let pinned = mesh.pinned();
         let mut portable = last[band.clone()].to_vec();
-        stencil.sweep_rows(
-            None,
-            &mut RowScratch::default(),
-            &params,
-            &positions,
+        let (positions, rows) = (&positions, rows.clone());
+        let next = &mut portable;
+        let sweep = Band {
+            positions,
             pinned,
-            &mut portable,
-            rows.start,
-            rows.end,
-        );
+            next,
+            rows: rows.clone(),
+        };
+        stencil.sweep_rows(None, &mut RowScratch::default(), &params, sweep);
         assert_ne!(portable, last[band.clone()], "the sweep moved the points");
         let mut dispatched = last[band.clone()].to_vec();
-        stencil.sweep(
-            Simd::detect(),
-            &mut RowScratch::default(),
-            &params,
-            &positions,
+        let (next, scratch) = (&mut dispatched, &mut RowScratch::default());
+        let sweep = Band {
+            positions,
             pinned,
-            &mut dispatched,
-            rows.start,
-            rows.end,
-        );
+            next,
+            rows,
+        };
+        stencil.sweep(Simd::detect(), scratch, &params, sweep);
         assert_same_bits(&dispatched, &portable);
     }
 
@@ -727,16 +706,13 @@ mod tests {
             let (nh, pinned) = (stencil.nh(), mesh.pinned());
             let run = |scratch: &mut RowScratch| {
                 let mut next = mesh.start_positions().to_vec();
-                stencil.sweep(
-                    Simd::detect(),
-                    scratch,
-                    &params(bending),
-                    &positions,
+                let band = Band {
+                    positions: &positions,
                     pinned,
-                    &mut next,
-                    0,
-                    nh,
-                );
+                    next: &mut next,
+                    rows: 0..nh,
+                };
+                stencil.sweep(Simd::detect(), scratch, &params(bending), band);
                 next
             };
             let fresh = run(&mut RowScratch::default());

@@ -62,9 +62,7 @@ pub(super) fn marks_row_avx2(
     // nw` the compiler finds each load in bounds once the direction loop is unrolled.
     let mut rows: [[&[f64]; 3]; 3] = [[&[]; 3]; 3];
     for (k, row) in rows.iter_mut().enumerate() {
-        let start = a0
-            .checked_sub(k * nw + LO[k])
-            .expect("a partner row in the window");
+        let start = a0 - (k * nw + LO[k]);
         for (r, s) in row.iter_mut().zip(soa) {
             *r = &s[start..][..LO[k] + nw + HI[k]];
         }
