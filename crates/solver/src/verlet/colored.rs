@@ -3,12 +3,11 @@
 //!
 //! # Why
 //!
-//! On a big hanging cloth nearly every spring sits at the limit: on the 256 x 256 benchmark
-//! cloth the course's sweep checks 5.7 springs and corrects about 2 per point and step. In the
-//! course's order each correction moves points that the next spring reads, so the sweep is one
-//! long chain of dependent square roots and divisions (some 60-70 cycles a correction), and
-//! that latency, not the work, made it over half of a step. No pre-pass helps: almost nothing
-//! can be proven inside the limit.
+//! On a big hanging cloth nearly every spring sits at the limit, so the course's sweep corrects
+//! a few springs per point and step. In the course's order each correction moves points that
+//! the next spring reads, so the sweep is one long chain of dependent square roots and
+//! divisions, and that latency, not the work, dominates the step. No pre-pass helps: almost
+//! nothing can be proven inside the limit. (docs/performance.md gives the counts.)
 //!
 //! # How
 //!
