@@ -375,9 +375,9 @@ impl Solver for FastImplicit {
         // they start from whichever of the prediction and the step's start has the lower one:
         // then even a truncated step ends with an energy no higher than the start's (see the
         // module doc).
-        let from_start = potential(mesh, params, inertia, weight, &state.positions, &self.y)
-            < potential(mesh, params, inertia, weight, &self.y, &self.y);
-        if from_start {
+        let (at_start, at_prediction) =
+            potentials(mesh, params, inertia, weight, &state.positions, &self.y);
+        if at_start < at_prediction {
             self.x.clone_from(&state.positions);
         } else {
             self.x.clone_from(&self.y);
@@ -474,31 +474,36 @@ impl Solver for FastImplicit {
     }
 }
 
-/// The incremental potential `Phi(x)` of the step without the stretch limit, J, up to a
-/// constant: `(1 + c h)/(2 h^2) |x - y|_M^2 + E_springs(x) - sum_i m g . x_i` (pinned points
-/// are the same in every `x` the solver compares, so they count alike).
-fn potential(
+/// The incremental potential `Phi` of the step without the stretch limit, J, up to a common
+/// constant, at the start `x0` and at the prediction `y`: `(1 + c h)/(2 h^2) |x - y|_M^2 +
+/// E_springs(x) - sum_i m g . x_i` (pinned points are the same in both, so they count alike),
+/// in one pass over the springs.
+fn potentials(
     mesh: &ClothMesh,
     params: &StepParams,
     inertia: f64,
     weight: Vec3,
-    x: &[Vec3],
+    x0: &[Vec3],
     y: &[Vec3],
-) -> f64 {
-    let mut phi = 0.0;
-    for ((xi, yi), &pinned) in x.iter().zip(y).zip(mesh.pinned()) {
+) -> (f64, f64) {
+    let (mut at_start, mut at_prediction) = (0.0, 0.0);
+    for ((a, b), &pinned) in x0.iter().zip(y).zip(mesh.pinned()) {
         if !pinned {
-            phi += 0.5 * inertia * (xi - yi).norm_squared() - weight.dot(xi);
+            at_start += 0.5 * inertia * (a - b).norm_squared() - weight.dot(a);
+            at_prediction -= weight.dot(b);
         }
     }
     for s in mesh.springs() {
         let k = params.stiffness(s.kind);
         if k != 0.0 {
-            let e = (x[s.b as usize] - x[s.a as usize]).norm() - s.rest;
-            phi += 0.5 * k * e * e;
+            let (i, j) = (s.a as usize, s.b as usize);
+            let e = (x0[j] - x0[i]).norm() - s.rest;
+            let f = (y[j] - y[i]).norm() - s.rest;
+            at_start += 0.5 * k * e * e;
+            at_prediction += 0.5 * k * f * f;
         }
     }
-    phi
+    (at_start, at_prediction)
 }
 
 fn add_rhs(rhs: &mut [f64], n: usize, f: usize, g: &Vec3) {
