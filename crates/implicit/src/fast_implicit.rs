@@ -6,7 +6,8 @@
 //! The step minimises the same incremental potential as [`ImplicitEuler`](crate::ImplicitEuler),
 //! `Phi(x) = (1 + c h)/(2 h^2) |x - y|_M^2 + E(x)`, `y = x0 + h v0 / (1 + c h)`, using the
 //! identity `k/2 (|d| - L)^2 = min_{|p| = L} k/2 |d - p|^2` for each spring vector `d`. Starting
-//! from `x = y`, each iteration does
+//! from whichever of the prediction `y` and the step's start `x0` has the lower `Phi` (the
+//! springs' part: the limit's term is zero at any allowed state), each iteration does
 //!
 //! ```text
 //! local:   p_s = L_s d_s / |d_s|                        (per spring, closed form)
@@ -55,11 +56,25 @@
 //!
 //! Every global step is a convex quadratic solve with a positive-definite matrix, and every
 //! local step a projection onto a bounded set, so an iterate can move no point farther than the
-//! targets it is pulled to: the iteration is stable for any step, stiffness and start. With few
-//! iterations it under-resolves stiff springs, which makes the cloth look softer and more
-//! damped, never unstable. At convergence the step equals [`ImplicitEuler`]'s up to the form of
+//! targets it is pulled to: the iteration is stable for any step, stiffness and start. Without
+//! the limit each local step and each global step lowers `Phi` (Liu et al.'s block descent), so
+//! even a truncated step ends with `Phi` no higher than at its start. Starting from `y` alone
+//! would bound the result by the springs' energy at `y`, which stiff springs and a velocity
+//! field that stretches them (a collision's or self-collision's push) make far larger than the
+//! energy the cloth has; starting from the lower of `Phi(y)` and `Phi(x0)` bounds it by
+//! `Phi(x0)`, the start's own spring energy plus the kinetic energy the prediction carries, so
+//! a truncated step cannot create energy. With few iterations it under-resolves stiff springs,
+//! which makes the cloth look softer and more damped, never unstable. At convergence the step equals [`ImplicitEuler`]'s up to the form of
 //! the limit (exact here, a stiff penalty there). Both implicit solvers are meant to run at
 //! one step per frame.
+//!
+//! # Collisions
+//!
+//! After the solve the collisions are applied as Verlet applies them, with each object's
+//! friction retimed to the step: the course's friction removes its share of a colliding point's
+//! displacement once per step of its 30 per frame, so at one step per frame it is applied as
+//! `1 - (1 - f)^30` (the same reading of a per-step constant as a rate that turns the course's
+//! damping into a drag rate). Otherwise a cloth that Verlet holds on a sphere slides off it.
 //!
 //! # Damping
 //!
@@ -77,6 +92,7 @@ use cloth_solver::{
 use crate::cholesky::Cholesky;
 use crate::commit::{commit, hold_still, inertial_prediction};
 use crate::memory::{Allocation, try_filled};
+use crate::retime::retime_friction;
 use crate::topology::{NONE, Topology};
 
 /// By default the local/global iterations of a step stop once a global step moves no point
@@ -111,6 +127,8 @@ pub struct FastImplicit {
     rhs: Vec<f64>,
     y: Vec<Vec3>,
     x: Vec<Vec3>,
+    /// The colliders with their friction retimed to the step.
+    colliders: Vec<Collider>,
     hash: SpatialHash,
 }
 
@@ -164,6 +182,7 @@ impl FastImplicit {
             rhs: Vec::new(),
             y: Vec::new(),
             x: Vec::new(),
+            colliders: Vec::new(),
             hash: SpatialHash::default(),
         }
     }
@@ -352,7 +371,17 @@ impl Solver for FastImplicit {
         });
 
         inertial_prediction(mesh, state, c * h, &mut self.y);
-        self.x.clone_from(&self.y);
+        // NOTE: the iterations only ever lower the incremental potential from their start, so
+        // they start from whichever of the prediction and the step's start has the lower one:
+        // then even a truncated step ends with an energy no higher than the start's (see the
+        // module doc).
+        let (at_start, at_prediction) =
+            potentials(mesh, params, inertia, weight, &state.positions, &self.y);
+        if at_start < at_prediction {
+            self.x.clone_from(&state.positions);
+        } else {
+            self.x.clone_from(&self.y);
+        }
         self.rhs.resize(3 * n, 0.0);
         let starts = mesh.start_positions();
 
@@ -428,9 +457,10 @@ impl Solver for FastImplicit {
             }
         }
 
+        retime_friction(colliders, params, &mut self.colliders);
         commit(
             mesh,
-            colliders,
+            &self.colliders,
             params,
             state,
             &topo.free_points,
@@ -442,6 +472,38 @@ impl Solver for FastImplicit {
             residual,
         })
     }
+}
+
+/// The incremental potential `Phi` of the step without the stretch limit, J, up to a common
+/// constant, at the start `x0` and at the prediction `y`: `(1 + c h)/(2 h^2) |x - y|_M^2 +
+/// E_springs(x) - sum_i m g . x_i` (pinned points are the same in both, so they count alike),
+/// in one pass over the springs.
+fn potentials(
+    mesh: &ClothMesh,
+    params: &StepParams,
+    inertia: f64,
+    weight: Vec3,
+    x0: &[Vec3],
+    y: &[Vec3],
+) -> (f64, f64) {
+    let (mut at_start, mut at_prediction) = (0.0, 0.0);
+    for ((a, b), &pinned) in x0.iter().zip(y).zip(mesh.pinned()) {
+        if !pinned {
+            at_start += 0.5 * inertia * (a - b).norm_squared() - weight.dot(a);
+            at_prediction -= weight.dot(b);
+        }
+    }
+    for s in mesh.springs() {
+        let k = params.stiffness(s.kind);
+        if k != 0.0 {
+            let (i, j) = (s.a as usize, s.b as usize);
+            let e = (x0[j] - x0[i]).norm() - s.rest;
+            let f = (y[j] - y[i]).norm() - s.rest;
+            at_start += 0.5 * k * e * e;
+            at_prediction += 0.5 * k * f * f;
+        }
+    }
+    (at_start, at_prediction)
 }
 
 fn add_rhs(rhs: &mut [f64], n: usize, f: usize, g: &Vec3) {
