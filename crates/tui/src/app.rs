@@ -5,7 +5,8 @@
 //! (after [`escape`] joins split escape sequences); the one [`keymap::KEYMAP`] dispatches keys
 //! and generates the footer and the help; the one [`params::PARAMS`] table drives the
 //! parameter panel. The cloth steps on its own thread ([`worker`]), which owns the simulation
-//! clock; the loop in [`runner`] waits on one channel for keys, signals and the worker's
+//! clock (compare mode's variants on one coordinator that steps them in lockstep,
+//! [`lockstep`]); the loop in [`runner`] waits on one channel for keys, signals and the worker's
 //! snapshots, answers each at once and draws at most `--fps` times a second.
 
 mod compare;
@@ -13,6 +14,7 @@ mod escape;
 mod input;
 mod keymap;
 mod layout;
+mod lockstep;
 mod message;
 mod model;
 mod panes;
@@ -246,9 +248,7 @@ pub fn build_compare_in(
             title: v.title,
             sent: sim.settings.clone(),
             sim,
-            worker: None,
             frame: None,
-            lagging: false,
         });
     }
     app.layout = model::Layout::Single;
@@ -263,6 +263,7 @@ pub fn build_compare_in(
         members,
         columns: args.vary[0].values.len().min(3),
         solver_varied,
+        group: None,
     });
     Ok(app)
 }

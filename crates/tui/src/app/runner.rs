@@ -224,6 +224,9 @@ fn event_loop(
         {
             anyhow::bail!("the simulation's thread stopped unexpectedly");
         }
+        if app.group().is_some_and(|g| !g.alive()) {
+            anyhow::bail!("the thread stepping the variants stopped unexpectedly");
+        }
 
         let now = Instant::now();
         let span = now.duration_since(meter.start);

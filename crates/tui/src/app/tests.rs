@@ -1247,3 +1247,57 @@ fn two_axes_compare_as_a_grid_of_at_most_three_by_three() {
     .unwrap_or_default();
     assert!(e.contains("grid of up to 3 x 3"), "{e}");
 }
+
+#[test]
+fn compare_keys_act_on_every_variant_through_the_one_coordinator() {
+    let mut app = compare_with("pinned4", &["cloth.ks=1,5000,100000"]);
+    app.running = false;
+    let (tx, rx) = std::sync::mpsc::channel();
+    let tx = std::sync::Mutex::new(tx);
+    app.start_worker(std::sync::Arc::new(move || {
+        let _ = tx.lock().unwrap().send(());
+    }))
+    .unwrap();
+    assert!(app.threaded() && app.worker.is_none(), "one coordinator");
+    let wait_for = |app: &mut App, done: &dyn Fn(&App) -> bool| {
+        while !done(app) {
+            rx.recv_timeout(Duration::from_secs(120))
+                .expect("a snapshot within two minutes");
+            update::adopt(app);
+        }
+    };
+    press(&mut app, KeyCode::Char('n'));
+    press(&mut app, KeyCode::Char('n'));
+    wait_for(&mut app, &|a| compared(a).iter().all(|s| s.frames == 2));
+    let screen = screen(&mut app, 160, 48);
+    // Two frames at 90 frames/s: the group's one time.
+    assert!(screen.contains("PAUSED 1x  t 0.022 s"), "{screen}");
+
+    press(&mut app, KeyCode::Char('r'));
+    assert!(
+        compared(&app)
+            .iter()
+            .all(|s| s.frames == 0 && s.time == 0.0),
+        "every pane shows the reset at once"
+    );
+    press(&mut app, KeyCode::Char(' '));
+    assert!(app.running);
+    wait_for(&mut app, &|a| a.sim.frames >= 5);
+    press(&mut app, KeyCode::Char(' '));
+    assert!(!app.running);
+    // The first snapshot taken after the pause (older ones are refused) is the last.
+    loop {
+        rx.recv_timeout(Duration::from_secs(120))
+            .expect("a snapshot within two minutes");
+        if update::adopt(&mut app) {
+            break;
+        }
+    }
+    let frames = app.sim.frames;
+    std::thread::sleep(Duration::from_millis(100));
+    update::adopt(&mut app);
+    assert!(
+        compared(&app).iter().all(|s| s.frames == frames),
+        "paused: nothing moves, and all stand at frame {frames}"
+    );
+}

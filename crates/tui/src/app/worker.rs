@@ -10,8 +10,9 @@
 //! The UI asks for a snapshot when it is ready to draw ([`Worker::adopt_into`]); the worker
 //! publishes one after the next step (and at once after a stop or a single frame), swapping
 //! position buffers rather than allocating, so a big cloth costs one copy per drawn frame.
-//! Nothing here knows of the terminal: several workers can run side by side, each notifying
-//! the same loop.
+//! Nothing here knows of the terminal. The snapshot of one cloth ([`Cloth`], filled by a
+//! [`Publisher`]) and the rate [`Meter`] serve compare mode's lockstep coordinator too
+//! ([`super::lockstep`]).
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
@@ -27,10 +28,10 @@ use super::sim::{Command, Simulation};
 pub const MAX_DEBT: Duration = Duration::from_millis(250);
 
 /// How often the rates are measured.
-const WINDOW: Duration = Duration::from_secs(1);
+pub const WINDOW: Duration = Duration::from_secs(1);
 
 /// Longest a paused worker sleeps before looking at its stop flag again.
-const IDLE: Duration = Duration::from_millis(500);
+pub const IDLE: Duration = Duration::from_millis(500);
 
 /// How fast a worker runs, measured over about a second of wall time.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -56,20 +57,83 @@ pub struct Adopted {
     pub rates: Rates,
 }
 
-/// What the worker published: everything the UI shows of the running cloth.
+/// One cloth's part of a snapshot: everything the UI shows of a running simulation, which its
+/// mirror (the UI's copy) takes in.
 #[derive(Debug, Default)]
-struct Published {
+pub struct Cloth {
     /// Positions at the end of the last step taken.
     positions: Vec<cloth_solver::Vec3>,
     time: f64,
     steps: u64,
     frames: u64,
     history: std::collections::VecDeque<super::sim::Sample>,
-    /// Rows of the worker's record not yet adopted, which start at this index of it.
+    /// Rows of the stepping side's record not yet adopted, which start at this index of it.
     rows_from: usize,
     new_rows: Vec<crate::export::StatsRow>,
     peak_kinetic: f64,
     fault: Option<super::sim::Fault>,
+}
+
+impl Cloth {
+    /// Moves this snapshot into `mirror`, whose settings, scene and solver the UI owns.
+    pub fn adopt_into(&mut self, mirror: &mut Simulation) {
+        std::mem::swap(&mut mirror.state.positions, &mut self.positions);
+        mirror.time = self.time;
+        mirror.steps = self.steps;
+        mirror.frames = self.frames;
+        mirror.history.clone_from(&self.history);
+        mirror.record.truncate(self.rows_from);
+        mirror.record.append(&mut self.new_rows);
+        mirror.peak_kinetic = self.peak_kinetic;
+        mirror.fault.clone_from(&self.fault);
+    }
+}
+
+/// The stepping side's part in publishing one simulation: the buffer the next snapshot's
+/// positions are copied into, and how much of the record was published.
+#[derive(Debug, Default)]
+pub struct Publisher {
+    spare: Vec<cloth_solver::Vec3>,
+    /// The record's generation and length at the last snapshot.
+    published: (u64, usize),
+}
+
+impl Publisher {
+    /// Copies `sim`'s positions into the spare buffer: done before taking the lock, so the UI
+    /// never waits on a big cloth's copy.
+    pub fn copy(&mut self, sim: &Simulation) {
+        self.spare.clone_from(&sim.state.positions);
+    }
+
+    /// Fills `p` (under the lock) from `sim`, handing over the positions copied last.
+    pub fn fill(&mut self, sim: &Simulation, p: &mut Cloth) {
+        std::mem::swap(&mut p.positions, &mut self.spare);
+        p.time = sim.time;
+        p.steps = sim.steps;
+        p.frames = sim.frames;
+        p.history.clone_from(&sim.history);
+        // NOTE: only the rows since the last snapshot travel, so a long run's table is
+        // copied once, not at every draw; a reset starts the table again.
+        if sim.generation != self.published.0 {
+            self.published = (sim.generation, 0);
+            p.new_rows.clear();
+        }
+        if p.new_rows.is_empty() {
+            p.rows_from = self.published.1;
+        }
+        let from = self.published.1.min(sim.record.len());
+        p.new_rows.extend_from_slice(&sim.record[from..]);
+        self.published.1 = sim.record.len();
+        p.peak_kinetic = sim.peak_kinetic;
+        p.fault.clone_from(&sim.fault);
+    }
+}
+
+/// What the worker published.
+#[derive(Debug, Default)]
+struct Published {
+    /// The cloth.
+    cloth: Cloth,
     /// Whether simulated time is advancing (a stop pauses it).
     running: bool,
     rates: Rates,
@@ -126,8 +190,7 @@ impl Worker {
                     commands: rx,
                     shared: inner,
                     notify,
-                    spare: Vec::new(),
-                    published: (0, 0),
+                    publisher: Publisher::default(),
                 }
                 .run();
             })?;
@@ -171,15 +234,7 @@ impl Worker {
             self.shared.wanted.store(true, Ordering::Release);
             return None;
         }
-        std::mem::swap(&mut mirror.state.positions, &mut p.positions);
-        mirror.time = p.time;
-        mirror.steps = p.steps;
-        mirror.frames = p.frames;
-        mirror.history.clone_from(&p.history);
-        mirror.record.truncate(p.rows_from);
-        mirror.record.append(&mut p.new_rows);
-        mirror.peak_kinetic = p.peak_kinetic;
-        mirror.fault.clone_from(&p.fault);
+        p.cloth.adopt_into(mirror);
         let adopted = Adopted {
             running: p.running,
             errors: std::mem::take(&mut p.errors),
@@ -207,28 +262,48 @@ struct Stepper {
     commands: Receiver<Command>,
     shared: Arc<Shared>,
     notify: Box<dyn Fn() + Send>,
-    /// The buffer the next snapshot's positions are copied into.
-    spare: Vec<cloth_solver::Vec3>,
-    /// The record's generation and length at the last snapshot.
-    published: (u64, usize),
+    publisher: Publisher,
 }
 
 /// Rates over a window of wall time.
-struct Meter {
-    start: Instant,
-    steps: u64,
-    sim_time: f64,
-    lagging: bool,
+pub struct Meter {
+    /// When the window began.
+    pub start: Instant,
+    /// Solver steps taken in it.
+    pub steps: u64,
+    /// Simulated seconds advanced in it.
+    pub sim_time: f64,
+    /// Whether owed time was dropped in it.
+    pub lagging: bool,
 }
 
 impl Meter {
-    fn new(now: Instant) -> Self {
+    /// A window beginning `now`.
+    pub fn new(now: Instant) -> Self {
         Self {
             start: now,
             steps: 0,
             sim_time: 0.0,
             lagging: false,
         }
+    }
+
+    /// The rates over the window once it has lasted [`WINDOW`] at `now` (`rate`: simulated
+    /// seconds per wall second asked for), starting the next window; `None` before.
+    pub fn rates(&mut self, now: Instant, rate: f64) -> Option<Rates> {
+        let span = now.duration_since(self.start);
+        if span < WINDOW {
+            return None;
+        }
+        let s = span.as_secs_f64();
+        let rates = Rates {
+            realtime_factor: self.sim_time / s / rate,
+            steps_per_sec: self.steps as f64 / s,
+            lagging: self.lagging,
+            measured: true,
+        };
+        *self = Self::new(now);
+        Some(rates)
     }
 }
 
@@ -311,17 +386,8 @@ impl Stepper {
                         Err(RecvTimeoutError::Disconnected) => return,
                     }
                 }
-                let now = Instant::now();
-                let span = now.duration_since(meter.start);
-                if span >= WINDOW {
-                    let s = span.as_secs_f64();
-                    rates = Rates {
-                        realtime_factor: meter.sim_time / s / self.rate,
-                        steps_per_sec: meter.steps as f64 / s,
-                        lagging: meter.lagging,
-                        measured: true,
-                    };
-                    meter = Meter::new(now);
+                if let Some(r) = meter.rates(Instant::now(), self.rate) {
+                    rates = r;
                 }
             }
 
@@ -334,34 +400,14 @@ impl Stepper {
 
     fn publish(&mut self, errors: &mut Vec<String>, rates: Rates, applied: u64) {
         self.shared.wanted.store(false, Ordering::Release);
-        // NOTE: the copy is made before taking the lock, so the UI never waits on a big
-        // cloth's copy; the buffers then change hands.
-        self.spare.clone_from(&self.sim.state.positions);
+        self.publisher.copy(&self.sim);
         {
             let mut p = self
                 .shared
                 .published
                 .lock()
                 .unwrap_or_else(PoisonError::into_inner);
-            std::mem::swap(&mut p.positions, &mut self.spare);
-            p.time = self.sim.time;
-            p.steps = self.sim.steps;
-            p.frames = self.sim.frames;
-            p.history.clone_from(&self.sim.history);
-            // NOTE: only the rows since the last snapshot travel, so a long run's table is
-            // copied once, not at every draw; a reset starts the table again.
-            if self.sim.generation != self.published.0 {
-                self.published = (self.sim.generation, 0);
-                p.new_rows.clear();
-            }
-            if p.new_rows.is_empty() {
-                p.rows_from = self.published.1;
-            }
-            let from = self.published.1.min(self.sim.record.len());
-            p.new_rows.extend_from_slice(&self.sim.record[from..]);
-            self.published.1 = self.sim.record.len();
-            p.peak_kinetic = self.sim.peak_kinetic;
-            p.fault.clone_from(&self.sim.fault);
+            self.publisher.fill(&self.sim, &mut p.cloth);
             p.running = self.running;
             p.rates = rates;
             p.errors.append(errors);
