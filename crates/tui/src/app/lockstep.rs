@@ -632,4 +632,63 @@ mod tests {
         );
         each_equals_its_separate_run(&sims, 2);
     }
+
+    /// Processor time of this process so far, s (Linux: `/proc/self/stat`, in ticks of 1/100 s).
+    fn cpu_seconds() -> Option<f64> {
+        let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+        let after = stat.rsplit_once(')')?.1;
+        let fields: Vec<&str> = after.split_whitespace().collect();
+        let ticks: f64 =
+            fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+        Some(ticks / 100.0)
+    }
+
+    /// Four `pinned4` variants for 3 s simulated (270 frames) through the live UI's coordinator:
+    /// at real time (is it kept?) and at sixteen times (how fast can the group go?). Prints the
+    /// figures docs/performance.md gives; asserts only the lockstep.
+    #[test]
+    #[ignore = "a measurement: run in release with --nocapture"]
+    fn four_pinned4_variants_for_three_simulated_seconds() {
+        let sets = [
+            "cloth.ks=1",
+            "cloth.ks=5000",
+            "cloth.ks=20000",
+            "cloth.ks=100000",
+        ];
+        for rate in [1.0, 16.0] {
+            let (g, rx, mut mirrors) = group(&sets, false);
+            let cpu = cpu_seconds();
+            let start = Instant::now();
+            g.send(Command::Run {
+                running: true,
+                rate,
+            });
+            // The rates of the last measured window, and whether any window lagged.
+            let seen = std::cell::Cell::new((0.0, false));
+            until(&g, &rx, &mut mirrors, |m, a| {
+                if a.rates.measured {
+                    let lagged = seen.get().1 || a.rates.lagging;
+                    seen.set((a.rates.realtime_factor, lagged));
+                }
+                m[0].frames >= 270
+            });
+            let wall = start.elapsed().as_secs_f64();
+            let cpu = cpu.zip(cpu_seconds()).map(|(a, b)| b - a);
+            g.send(Command::Run {
+                running: false,
+                rate,
+            });
+            until(&g, &rx, &mut mirrors, |_, a| !a.running);
+            let frames = mirrors[0].frames;
+            assert!(mirrors.iter().all(|s| s.frames == frames), "lockstep");
+            let (factor, lagged) = seen.get();
+            println!(
+                "rate {rate}x: 270 frames (3 s simulated) in {wall:.2} s wall, {} processor; \
+                 {:.2} x real time overall, the status line's last factor {factor:.2}, \
+                 lagging {lagged}",
+                cpu.map_or("unknown".to_owned(), |c| format!("{c:.2} s")),
+                3.0 / wall,
+            );
+        }
+    }
 }

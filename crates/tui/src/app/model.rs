@@ -358,7 +358,7 @@ impl App {
     /// and solver.
     fn stepping_copy(sim: &Simulation) -> anyhow::Result<Simulation> {
         let mut copy = Simulation::new(
-            sim.scene.clone(),
+            std::sync::Arc::clone(&sim.scene),
             sim.registry().clone(),
             Some(sim.entry().name()),
         )?;

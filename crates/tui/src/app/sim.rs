@@ -5,6 +5,7 @@
 //! the same bits. Each frame ends with the divergence guard ([`crate::guard`]).
 
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 use cloth_mesh::ClothState;
 use cloth_scene::Scene;
@@ -73,8 +74,9 @@ pub enum Command {
 
 /// The running cloth.
 pub struct Simulation {
-    /// The scene as loaded (its values are what "restore" goes back to).
-    pub scene: Scene,
+    /// The scene as loaded (its values are what "restore" goes back to), shared with the
+    /// copies of this simulation that a stepping thread runs: one mesh for both.
+    pub scene: Arc<Scene>,
     /// Live parameters and objects.
     pub settings: Settings,
     /// The cloth's positions: the one source of truth.
@@ -113,7 +115,12 @@ impl Simulation {
     ///
     /// # Errors
     /// When the solver is not registered or refuses the scene's options for it.
-    pub fn new(scene: Scene, registry: Registry, name: Option<&str>) -> anyhow::Result<Self> {
+    pub fn new(
+        scene: impl Into<Arc<Scene>>,
+        registry: Registry,
+        name: Option<&str>,
+    ) -> anyhow::Result<Self> {
+        let scene = scene.into();
         let choice = solvers::choose(&registry, &scene, name)?;
         let built = choice.build(&scene.mesh)?;
         let state = ClothState::new(&scene.mesh);

@@ -1301,3 +1301,37 @@ fn compare_keys_act_on_every_variant_through_the_one_coordinator() {
         "paused: nothing moves, and all stand at frame {frames}"
     );
 }
+
+#[test]
+fn the_variants_of_a_big_cloth_are_drawn_through_one_coarse_grid() {
+    let args = super::CompareArgs {
+        ui: Args {
+            scene: "pinned4".to_owned(),
+            sets: vec![
+                "cloth.num_width_points=300".to_owned(),
+                "cloth.num_height_points=300".to_owned(),
+            ],
+            ..Args::default()
+        },
+        vary: vec!["cloth.damping=0.2,1".parse().unwrap()],
+    };
+    let mut app = super::build_compare_in(
+        &args,
+        &crate::default_registry(),
+        false,
+        &cloth_render::ColorEnv::default(),
+    )
+    .unwrap();
+    let screen = screen(&mut app, 160, 48);
+    let display = app.display.as_ref().expect("a big cloth is drawn coarser");
+    assert_eq!(display.mesh.nw(), panes::DISPLAY_SIDE);
+    let c = app.compare.as_ref().unwrap();
+    assert!(
+        display.draws(&c.members[0].sim.scene.mesh),
+        "one grid for both"
+    );
+    assert!(
+        c.frame.is_some() && c.members[0].frame.is_some(),
+        "{screen}"
+    );
+}
