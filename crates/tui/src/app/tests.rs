@@ -1335,3 +1335,14 @@ fn the_variants_of_a_big_cloth_are_drawn_through_one_coarse_grid() {
         "{screen}"
     );
 }
+
+#[test]
+fn varied_values_too_long_for_the_panel_end_in_an_ellipsis() {
+    let mut app = compare_with("pinned4", &["cloth.ks=1,5000,20000,100000"]);
+    let screen = screen(&mut app, 160, 48);
+    let row = screen
+        .lines()
+        .find(|l| l.contains("│ ks "))
+        .expect("the ks row");
+    assert!(row.contains("1,5000,20000,…"), "{row}");
+}
