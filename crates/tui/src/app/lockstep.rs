@@ -322,14 +322,7 @@ impl Coordinator {
             }
 
             if self.running {
-                let now = Instant::now();
-                debt += now.duration_since(last).as_secs_f64() * self.rate;
-                last = now;
-                let cap = MAX_DEBT.as_secs_f64() * self.rate;
-                if debt > cap {
-                    debt = cap;
-                    meter.lagging = true;
-                }
+                self.owe(&mut debt, &mut last, &mut meter);
                 if !in_frame {
                     let span = self.frame_span();
                     if debt >= span {
@@ -378,10 +371,13 @@ impl Coordinator {
                     }
                 }
             }
-            if self.running
-                && let Some(r) = meter.rates(Instant::now(), self.rate)
-            {
-                rates = r;
+            if self.running {
+                // Owed again before the window closes, so a frame too long to keep real time
+                // counts as lagging in the window it ends.
+                self.owe(&mut debt, &mut last, &mut meter);
+                if let Some(r) = meter.rates(Instant::now(), self.rate) {
+                    rates = r;
+                }
             }
 
             // NOTE: only between frames, so every variant shown is at the same frame.
@@ -389,6 +385,19 @@ impl Coordinator {
                 self.publish(&mut errors, rates, applied);
                 force = false;
             }
+        }
+    }
+
+    /// Adds the wall time since `last` to the simulated time owed; what exceeds
+    /// [`MAX_DEBT`] is forgiven and the window marked lagging.
+    fn owe(&self, debt: &mut f64, last: &mut Instant, meter: &mut Meter) {
+        let now = Instant::now();
+        *debt += now.duration_since(*last).as_secs_f64() * self.rate;
+        *last = now;
+        let cap = MAX_DEBT.as_secs_f64() * self.rate;
+        if *debt > cap {
+            *debt = cap;
+            meter.lagging = true;
         }
     }
 
