@@ -371,7 +371,9 @@ impl App {
 
     /// Moves the stepping of the cloth to a worker thread (replacing any worker), going on
     /// from the cloth's state (the start positions, or the state `--from` gave) with the live
-    /// settings and solver; in compare mode, every variant to one lockstep coordinator.
+    /// settings and solver; in compare mode, every variant to one lockstep coordinator. The
+    /// thread's copies share the scenes (meshes included) with the UI's, and only they hold
+    /// a solver.
     ///
     /// # Errors
     /// When the solver cannot be built or the thread cannot start.
@@ -391,6 +393,9 @@ impl App {
                 threads,
                 Box::new(move || n()),
             )?);
+            for m in &mut c.members {
+                m.sim.release_solver();
+            }
         } else {
             self.worker = Some(Worker::spawn(
                 Self::stepping_copy(&self.sim)?,
@@ -399,6 +404,7 @@ impl App {
                 Box::new(move || n()),
             )?);
         }
+        self.sim.release_solver();
         self.notify = Some(notify);
         Ok(())
     }

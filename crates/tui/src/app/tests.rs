@@ -1259,6 +1259,10 @@ fn compare_keys_act_on_every_variant_through_the_one_coordinator() {
     }))
     .unwrap();
     assert!(app.threaded() && app.worker.is_none(), "one coordinator");
+    assert!(
+        compared(&app).iter().all(|s| !s.has_solver()),
+        "the UI's copies hold no solver: the coordinator's do"
+    );
     let wait_for = |app: &mut App, done: &dyn Fn(&App) -> bool| {
         while !done(app) {
             rx.recv_timeout(Duration::from_secs(120))
