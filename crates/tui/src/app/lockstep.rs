@@ -19,13 +19,13 @@
 //! variant that diverges stops alone (its simulation keeps its fault) and the others go on; a
 //! stopped variant waits for a reset, so it never has to catch up with the group.
 
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
 use super::sim::{Command, Simulation};
-use super::worker::{Adopted, Cloth, IDLE, MAX_DEBT, Meter, Publisher, Rates};
+use super::worker::{Adopted, Cloth, IDLE, MAX_DEBT, Mailbox, Meter, Publisher, Rates};
 
 /// A command for every variant (`None`) or for one, by its index in the study.
 type Order = (Option<usize>, Command);
@@ -84,38 +84,13 @@ pub fn frame_of(sims: &[&Simulation]) -> (u64, f64) {
     s.map_or((0, 0.0), |s| (s.frames, s.time))
 }
 
-/// What the coordinator published.
-#[derive(Debug, Default)]
-struct Published {
-    /// Each variant's cloth, in the study's order.
-    cloths: Vec<Cloth>,
-    /// Whether the group's time is advancing.
-    running: bool,
-    rates: Rates,
-    /// Set by the coordinator when this is newer than what the UI last adopted.
-    fresh: bool,
-    /// Errors of commands, for the message line.
-    errors: Vec<String>,
-    /// Commands applied before this snapshot was taken.
-    applied: u64,
-}
-
-struct Shared {
-    published: Mutex<Published>,
-    /// The UI wants the next frame (it has drawn the last one).
-    wanted: AtomicBool,
-    /// The UI is gone: end the thread.
-    stop: AtomicBool,
-    /// A command is waiting: leave the frame in progress between two steps.
-    interrupt: AtomicBool,
-}
-
 /// The variants of a study stepping in lockstep on a thread of their own.
 pub struct Lockstep {
     commands: Sender<Order>,
-    shared: Arc<Shared>,
-    /// Commands sent so far: a snapshot taken before the coordinator applied them is stale.
-    sent: AtomicU64,
+    /// Each variant's cloth, in the study's order, and the news.
+    mailbox: Arc<Mailbox<Vec<Cloth>>>,
+    /// A command is waiting: the frame in progress leaves off between two steps.
+    interrupt: Arc<AtomicBool>,
 }
 
 impl Lockstep {
@@ -133,16 +108,9 @@ impl Lockstep {
         notify: Box<dyn Fn() + Send>,
     ) -> std::io::Result<Self> {
         let (tx, rx) = mpsc::channel();
-        let shared = Arc::new(Shared {
-            published: Mutex::new(Published {
-                cloths: sims.iter().map(|_| Cloth::default()).collect(),
-                ..Published::default()
-            }),
-            wanted: AtomicBool::new(true),
-            stop: AtomicBool::new(false),
-            interrupt: AtomicBool::new(false),
-        });
-        let inner = Arc::clone(&shared);
+        let mailbox = Mailbox::new(sims.iter().map(|_| Cloth::default()).collect());
+        let interrupt = Arc::new(AtomicBool::new(false));
+        let (inner, flag) = (Arc::clone(&mailbox), Arc::clone(&interrupt));
         let frame = frame_of(&sims.iter().collect::<Vec<_>>()).0;
         std::thread::Builder::new()
             .name("clothsim-lockstep".to_owned())
@@ -155,15 +123,16 @@ impl Lockstep {
                     rate,
                     threads: threads.max(1),
                     commands: rx,
-                    shared: inner,
+                    mailbox: inner,
+                    interrupt: flag,
                     notify,
                 }
                 .run();
             })?;
         Ok(Self {
             commands: tx,
-            shared,
-            sent: AtomicU64::new(0),
+            mailbox,
+            interrupt,
         })
     }
 
@@ -181,46 +150,24 @@ impl Lockstep {
         // NOTE: a send fails only when the thread has ended (a simulation panicked); the UI
         // then sees no more snapshots and says so rather than stopping here.
         if self.commands.send(order).is_ok() {
-            self.sent.fetch_add(1, Ordering::AcqRel);
-            self.shared.interrupt.store(true, Ordering::Release);
+            self.mailbox.count_sent();
+            self.interrupt.store(true, Ordering::Release);
         }
     }
 
     /// Whether the thread is still there to step.
     pub fn alive(&self) -> bool {
-        Arc::strong_count(&self.shared) > 1
+        Arc::strong_count(&self.mailbox) > 1
     }
 
     /// Moves the newest snapshot into `mirrors` (the UI's copies, in the study's order) and
     /// asks for the next; `None` when nothing new arrived.
     pub fn adopt_into(&self, mirrors: &mut [&mut Simulation]) -> Option<Adopted> {
-        let mut p = self
-            .shared
-            .published
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner);
-        if !p.fresh {
-            return None;
-        }
-        p.fresh = false;
-        if p.applied < self.sent.load(Ordering::Acquire) {
-            // Taken before the coordinator saw the latest commands: showing it would undo them
-            // on screen for a moment. The next one follows.
-            drop(p);
-            self.shared.wanted.store(true, Ordering::Release);
-            return None;
-        }
-        for (cloth, mirror) in p.cloths.iter_mut().zip(mirrors.iter_mut()) {
-            cloth.adopt_into(mirror);
-        }
-        let adopted = Adopted {
-            running: p.running,
-            errors: std::mem::take(&mut p.errors),
-            rates: p.rates,
-        };
-        drop(p);
-        self.shared.wanted.store(true, Ordering::Release);
-        Some(adopted)
+        self.mailbox.take(|cloths| {
+            for (cloth, mirror) in cloths.iter_mut().zip(mirrors.iter_mut()) {
+                cloth.adopt_into(mirror);
+            }
+        })
     }
 }
 
@@ -228,8 +175,8 @@ impl Drop for Lockstep {
     fn drop(&mut self) {
         // The thread ends between two steps; it is not joined, so quitting never waits for a
         // long step of a big cloth.
-        self.shared.stop.store(true, Ordering::Release);
-        self.shared.interrupt.store(true, Ordering::Release);
+        self.mailbox.leave();
+        self.interrupt.store(true, Ordering::Release);
     }
 }
 
@@ -243,7 +190,8 @@ struct Coordinator {
     rate: f64,
     threads: usize,
     commands: Receiver<Order>,
-    shared: Arc<Shared>,
+    mailbox: Arc<Mailbox<Vec<Cloth>>>,
+    interrupt: Arc<AtomicBool>,
     notify: Box<dyn Fn() + Send>,
 }
 
@@ -262,7 +210,7 @@ impl Coordinator {
         // Single frames asked for and not yet begun.
         let mut asked = 0_u64;
         loop {
-            if self.shared.stop.load(Ordering::Acquire) {
+            if self.mailbox.left() {
                 return;
             }
             let mut pending: Vec<Order> = held.take().into_iter().collect();
@@ -276,7 +224,7 @@ impl Coordinator {
             }
             // NOTE: cleared before the queue is read, so a command sent after the read sets it
             // again and the next frame leaves off for it.
-            self.shared.interrupt.store(false, Ordering::Release);
+            self.interrupt.store(false, Ordering::Release);
             pending.extend(self.commands.try_iter());
             for (target, c) in pending {
                 force = true;
@@ -348,12 +296,7 @@ impl Coordinator {
                 let stopped = self.sims.iter().filter(|s| s.fault.is_some()).count();
                 let span = self.frame_span();
                 let mut sims: Vec<&mut Simulation> = self.sims.iter_mut().collect();
-                let ended = advance(
-                    &mut sims,
-                    self.frame + 1,
-                    self.threads,
-                    &self.shared.interrupt,
-                );
+                let ended = advance(&mut sims, self.frame + 1, self.threads, &self.interrupt);
                 meter.steps += self.steps().saturating_sub(before);
                 if ended {
                     in_frame = false;
@@ -381,7 +324,7 @@ impl Coordinator {
             }
 
             // NOTE: only between frames, so every variant shown is at the same frame.
-            if !in_frame && (force || self.running && self.shared.wanted.load(Ordering::Acquire)) {
+            if !in_frame && (force || self.running && self.mailbox.wanted()) {
                 self.publish(&mut errors, rates, applied);
                 force = false;
             }
@@ -418,30 +361,16 @@ impl Coordinator {
     }
 
     fn publish(&mut self, errors: &mut Vec<String>, rates: Rates, applied: u64) {
-        self.shared.wanted.store(false, Ordering::Release);
         for (publisher, sim) in self.publishers.iter_mut().zip(&self.sims) {
             publisher.copy(sim);
         }
-        {
-            let mut p = self
-                .shared
-                .published
-                .lock()
-                .unwrap_or_else(PoisonError::into_inner);
-            for ((publisher, sim), cloth) in self
-                .publishers
-                .iter_mut()
-                .zip(&self.sims)
-                .zip(&mut p.cloths)
-            {
-                publisher.fill(sim, cloth);
-            }
-            p.running = self.running;
-            p.rates = rates;
-            p.errors.append(errors);
-            p.applied = applied;
-            p.fresh = true;
-        }
+        let (publishers, sims) = (&mut self.publishers, &self.sims);
+        self.mailbox
+            .put(self.running, rates, errors, applied, |cloths| {
+                for ((publisher, sim), cloth) in publishers.iter_mut().zip(sims).zip(cloths) {
+                    publisher.fill(sim, cloth);
+                }
+            });
         (self.notify)();
     }
 }

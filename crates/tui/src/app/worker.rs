@@ -10,9 +10,9 @@
 //! The UI asks for a snapshot when it is ready to draw ([`Worker::adopt_into`]); the worker
 //! publishes one after the next step (and at once after a stop or a single frame), swapping
 //! position buffers rather than allocating, so a big cloth costs one copy per drawn frame.
-//! Nothing here knows of the terminal. The snapshot of one cloth ([`Cloth`], filled by a
-//! [`Publisher`]) and the rate [`Meter`] serve compare mode's lockstep coordinator too
-//! ([`super::lockstep`]).
+//! Nothing here knows of the terminal. The exchange of snapshots ([`Mailbox`]), the snapshot of
+//! one cloth ([`Cloth`], filled by a [`Publisher`]) and the rate [`Meter`] serve compare mode's
+//! lockstep coordinator too ([`super::lockstep`]).
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
@@ -129,15 +129,14 @@ impl Publisher {
     }
 }
 
-/// What the worker published.
+/// What a stepping thread published: `C`, the cloth (or the cloths), and the news.
 #[derive(Debug, Default)]
-struct Published {
-    /// The cloth.
-    cloth: Cloth,
+struct Published<C> {
+    cloth: C,
     /// Whether simulated time is advancing (a stop pauses it).
     running: bool,
     rates: Rates,
-    /// Set by the worker when this is newer than what the UI last adopted.
+    /// Set by the thread when this is newer than what the UI last adopted.
     fresh: bool,
     /// Errors of commands, for the message line.
     errors: Vec<String>,
@@ -145,20 +144,112 @@ struct Published {
     applied: u64,
 }
 
-struct Shared {
-    published: Mutex<Published>,
+/// Where a stepping thread leaves its snapshots of `C` (a [`Cloth`], or compare mode's one per
+/// variant) and the UI takes them: the one exchange between the two, with the UI's wish for the
+/// next snapshot, its count of commands sent and its leaving.
+pub struct Mailbox<C> {
+    published: Mutex<Published<C>>,
     /// The UI wants the next state (it has drawn the last one).
     wanted: AtomicBool,
     /// The UI is gone: end the thread.
     stop: AtomicBool,
+    /// Commands sent so far: a snapshot taken before the thread applied them all is stale.
+    sent: AtomicU64,
+}
+
+impl<C: Default> Mailbox<C> {
+    /// An empty mailbox holding `cloth` to fill.
+    pub fn new(cloth: C) -> Arc<Self> {
+        Arc::new(Self {
+            published: Mutex::new(Published {
+                cloth,
+                ..Published::default()
+            }),
+            wanted: AtomicBool::new(true),
+            stop: AtomicBool::new(false),
+            sent: AtomicU64::new(0),
+        })
+    }
+}
+
+impl<C> Mailbox<C> {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Published<C>> {
+        self.published
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// The UI's side: counts a command sent.
+    pub fn count_sent(&self) {
+        self.sent.fetch_add(1, Ordering::AcqRel);
+    }
+
+    /// The UI's side: hands the newest snapshot to `adopt` and asks for the next; `None` when
+    /// nothing new arrived.
+    pub fn take(&self, adopt: impl FnOnce(&mut C)) -> Option<Adopted> {
+        let mut p = self.lock();
+        if !p.fresh {
+            return None;
+        }
+        p.fresh = false;
+        if p.applied < self.sent.load(Ordering::Acquire) {
+            // Taken before the thread saw the latest commands (a reset, a pause): showing it
+            // would undo them on screen for a moment. The next one follows.
+            drop(p);
+            self.wanted.store(true, Ordering::Release);
+            return None;
+        }
+        adopt(&mut p.cloth);
+        let adopted = Adopted {
+            running: p.running,
+            errors: std::mem::take(&mut p.errors),
+            rates: p.rates,
+        };
+        drop(p);
+        self.wanted.store(true, Ordering::Release);
+        Some(adopted)
+    }
+
+    /// The UI's side: it is gone; the thread ends at its next look.
+    pub fn leave(&self) {
+        self.stop.store(true, Ordering::Release);
+    }
+
+    /// The thread's side: whether the UI is gone.
+    pub fn left(&self) -> bool {
+        self.stop.load(Ordering::Acquire)
+    }
+
+    /// The thread's side: whether the UI has drawn the last snapshot and wants the next.
+    pub fn wanted(&self) -> bool {
+        self.wanted.load(Ordering::Acquire)
+    }
+
+    /// The thread's side: publishes, `fill` writing the cloth under the lock (copy big
+    /// buffers before, so the UI never waits on them), with the news.
+    pub fn put(
+        &self,
+        running: bool,
+        rates: Rates,
+        errors: &mut Vec<String>,
+        applied: u64,
+        fill: impl FnOnce(&mut C),
+    ) {
+        self.wanted.store(false, Ordering::Release);
+        let mut p = self.lock();
+        fill(&mut p.cloth);
+        p.running = running;
+        p.rates = rates;
+        p.errors.append(errors);
+        p.applied = applied;
+        p.fresh = true;
+    }
 }
 
 /// A simulation stepping on its own thread.
 pub struct Worker {
     commands: Sender<Command>,
-    shared: Arc<Shared>,
-    /// Commands sent so far: a snapshot taken before the worker applied them all is stale.
-    sent: AtomicU64,
+    mailbox: Arc<Mailbox<Cloth>>,
 }
 
 impl Worker {
@@ -174,12 +265,8 @@ impl Worker {
         notify: Box<dyn Fn() + Send>,
     ) -> std::io::Result<Self> {
         let (tx, rx) = mpsc::channel();
-        let shared = Arc::new(Shared {
-            published: Mutex::new(Published::default()),
-            wanted: AtomicBool::new(true),
-            stop: AtomicBool::new(false),
-        });
-        let inner = Arc::clone(&shared);
+        let mailbox = Mailbox::new(Cloth::default());
+        let inner = Arc::clone(&mailbox);
         std::thread::Builder::new()
             .name("clothsim-sim".to_owned())
             .spawn(move || {
@@ -188,7 +275,7 @@ impl Worker {
                     running,
                     rate,
                     commands: rx,
-                    shared: inner,
+                    mailbox: inner,
                     notify,
                     publisher: Publisher::default(),
                 }
@@ -196,8 +283,7 @@ impl Worker {
             })?;
         Ok(Self {
             commands: tx,
-            shared,
-            sent: AtomicU64::new(0),
+            mailbox,
         })
     }
 
@@ -206,43 +292,19 @@ impl Worker {
         // NOTE: a send fails only when the thread has ended (its simulation panicked); the
         // UI then sees no more snapshots and says so rather than stopping here.
         if self.commands.send(command).is_ok() {
-            self.sent.fetch_add(1, Ordering::AcqRel);
+            self.mailbox.count_sent();
         }
     }
 
     /// Whether the thread is still there to step.
     pub fn alive(&self) -> bool {
-        Arc::strong_count(&self.shared) > 1
+        Arc::strong_count(&self.mailbox) > 1
     }
 
     /// Moves the newest snapshot into `mirror` (the UI's copy, whose settings, scene and
     /// solver the UI owns) and asks for the next; `None` when nothing new arrived.
     pub fn adopt_into(&self, mirror: &mut Simulation) -> Option<Adopted> {
-        let mut p = self
-            .shared
-            .published
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner);
-        if !p.fresh {
-            return None;
-        }
-        p.fresh = false;
-        if p.applied < self.sent.load(Ordering::Acquire) {
-            // Taken before the worker saw the latest commands (a reset, a pause): showing it
-            // would undo them on screen for a moment. The next one follows at once.
-            drop(p);
-            self.shared.wanted.store(true, Ordering::Release);
-            return None;
-        }
-        p.cloth.adopt_into(mirror);
-        let adopted = Adopted {
-            running: p.running,
-            errors: std::mem::take(&mut p.errors),
-            rates: p.rates,
-        };
-        drop(p);
-        self.shared.wanted.store(true, Ordering::Release);
-        Some(adopted)
+        self.mailbox.take(|cloth| cloth.adopt_into(mirror))
     }
 }
 
@@ -250,7 +312,7 @@ impl Drop for Worker {
     fn drop(&mut self) {
         // The thread ends after its current step; it is not joined, so quitting never waits
         // for a long step of a big cloth.
-        self.shared.stop.store(true, Ordering::Release);
+        self.mailbox.leave();
     }
 }
 
@@ -260,7 +322,7 @@ struct Stepper {
     running: bool,
     rate: f64,
     commands: Receiver<Command>,
-    shared: Arc<Shared>,
+    mailbox: Arc<Mailbox<Cloth>>,
     notify: Box<dyn Fn() + Send>,
     publisher: Publisher,
 }
@@ -318,7 +380,7 @@ impl Stepper {
         let mut force = true;
         let mut applied = 0_u64;
         loop {
-            if self.shared.stop.load(Ordering::Acquire) {
+            if self.mailbox.left() {
                 return;
             }
             let mut pending: Vec<Command> = held.take().into_iter().collect();
@@ -391,7 +453,7 @@ impl Stepper {
                 }
             }
 
-            if force || self.running && self.shared.wanted.load(Ordering::Acquire) {
+            if force || self.running && self.mailbox.wanted() {
                 self.publish(&mut errors, rates, applied);
                 force = false;
             }
@@ -399,21 +461,12 @@ impl Stepper {
     }
 
     fn publish(&mut self, errors: &mut Vec<String>, rates: Rates, applied: u64) {
-        self.shared.wanted.store(false, Ordering::Release);
         self.publisher.copy(&self.sim);
-        {
-            let mut p = self
-                .shared
-                .published
-                .lock()
-                .unwrap_or_else(PoisonError::into_inner);
-            self.publisher.fill(&self.sim, &mut p.cloth);
-            p.running = self.running;
-            p.rates = rates;
-            p.errors.append(errors);
-            p.applied = applied;
-            p.fresh = true;
-        }
+        let (publisher, sim) = (&mut self.publisher, &self.sim);
+        self.mailbox
+            .put(self.running, rates, errors, applied, |cloth| {
+                publisher.fill(sim, cloth);
+            });
         (self.notify)();
     }
 }
