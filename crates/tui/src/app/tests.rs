@@ -1210,6 +1210,16 @@ fn a_diverging_variant_stops_alone_and_greyed_with_its_reason() {
     assert!(sims[1].fault.is_none(), "the other goes on");
     assert!(sims[1].frames > sims[0].frames, "and is further on");
     assert_eq!(app.overlay, Overlay::None, "no box stops the others");
+    let note = app
+        .note
+        .as_ref()
+        .map(|n| n.text.clone())
+        .unwrap_or_default();
+    assert!(
+        note.contains("density=0.1 stopped at") && note.contains("the others go on"),
+        "{note}"
+    );
+    assert!(app.running, "the group runs on");
     let screen = screen(&mut app, 160, 48);
     assert!(screen.contains("stopped at"), "{screen}");
 }

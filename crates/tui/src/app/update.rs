@@ -419,8 +419,7 @@ fn step_frame(app: &mut App) {
     if app.compare.is_some() {
         let before = faults(app);
         app.step_group_inline();
-        stopped_variants(app, &before);
-        if app.note.as_ref().is_none_or(|n| n.level == Level::Info) {
+        if !stopped_variants(app, &before) {
             say_frame(app);
         }
         return;
@@ -456,10 +455,10 @@ fn faults(app: &App) -> Vec<bool> {
 }
 
 /// Compare mode: says which variant stopped since `before` (which variants had), and that the
-/// others go on; when none is left, the group pauses.
-fn stopped_variants(app: &mut App, before: &[bool]) {
+/// others go on; when none is left, the group pauses. True when one stopped.
+fn stopped_variants(app: &mut App, before: &[bool]) -> bool {
     let Some(c) = &app.compare else {
-        return;
+        return false;
     };
     let sims = std::iter::once((c.title.as_str(), &app.sim))
         .chain(c.members.iter().map(|m| (m.title.as_str(), &m.sim)));
@@ -478,7 +477,7 @@ fn stopped_variants(app: &mut App, before: &[bool]) {
         }
     }
     let Some(text) = newly else {
-        return;
+        return false;
     };
     if live == 0 {
         app.running = false;
@@ -492,6 +491,7 @@ fn stopped_variants(app: &mut App, before: &[bool]) {
             format!("{text}; the others go on (r resets all)"),
         );
     }
+    true
 }
 
 /// Takes in what the coordinator published (compare mode): every variant, the group's rates
@@ -505,14 +505,14 @@ fn adopt_group(app: &mut App) -> bool {
     for e in got.errors {
         app.say(Level::Error, e);
     }
-    stopped_variants(app, &before);
+    let stopped = stopped_variants(app, &before);
     if !got.running && app.running {
         // The group paused by itself: to step a frame, or every variant stopped.
         app.running = false;
     }
     if app.step_note {
         app.step_note = false;
-        if app.note.as_ref().is_none_or(|n| n.level == Level::Info) {
+        if !stopped {
             say_frame(app);
         }
     }
