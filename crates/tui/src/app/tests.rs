@@ -1360,3 +1360,38 @@ fn varied_values_too_long_for_the_panel_end_in_an_ellipsis() {
         .expect("the ks row");
     assert!(row.contains("1,5000,20000,…"), "{row}");
 }
+
+#[test]
+fn a_study_is_refused_when_its_variants_together_need_more_memory_than_allowed() {
+    let scene = cloth_scene::load("pinned4", &[]).unwrap();
+    let registry = crate::default_registry();
+    let choice = crate::solvers::choose(&registry, &scene, None).unwrap();
+    let one = crate::memory::ui_need(&choice.entry, &choice.options, &scene.mesh);
+    // Room for the panes' one drawing and the cloths and solvers of one variant and a half:
+    // one alone opens, three do not.
+    let max = Some(one.total() + one.solver / 2 + one.cloth / 2);
+    let args = |vary: &str| super::CompareArgs {
+        ui: Args {
+            max_memory: max,
+            ..Args::default()
+        },
+        vary: vec![vary.parse().unwrap()],
+    };
+    let env = cloth_render::ColorEnv::default();
+    let e = super::build_compare_in(&args("cloth.ks=1,5000,100000"), &registry, false, &env)
+        .err()
+        .map(|e| format!("{e:#}"))
+        .unwrap_or_default();
+    assert!(
+        e.contains("run as 3 variants") && e.contains("--max-memory"),
+        "{e}"
+    );
+    let ui = Args {
+        max_memory: max,
+        ..Args::default()
+    };
+    assert!(
+        build_in(&ui, &registry, false, &env).is_ok(),
+        "one variant fits"
+    );
+}
