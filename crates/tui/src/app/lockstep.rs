@@ -461,7 +461,12 @@ mod tests {
 
     /// Every copy is at frame `frames` with the bits of its separate run.
     fn each_equals_its_separate_run(mirrors: &[Simulation], frames: u64) {
-        for (sim, set) in mirrors.iter().zip(SETS) {
+        each_equals_its_run(mirrors, &SETS, frames);
+    }
+
+    /// Every copy (of `sets`) is at frame `frames` with the bits of its separate run.
+    fn each_equals_its_run(mirrors: &[Simulation], sets: &[&str], frames: u64) {
+        for (sim, &set) in mirrors.iter().zip(sets) {
             assert_eq!(
                 sim.frames, frames,
                 "{set}: every variant at the group's frame"
@@ -517,6 +522,23 @@ mod tests {
             m.iter().all(|s| s.frames == 2 && s.record.len() == 3)
         });
         each_equals_its_separate_run(&mirrors, 2);
+    }
+
+    #[test]
+    fn variants_of_different_solvers_and_steps_per_frame_end_each_frame_together() {
+        let sets = ["simulation.solver=verlet", "simulation.solver=implicit"];
+        let (g, rx, mut mirrors) = group(&sets, false);
+        assert_ne!(
+            mirrors[0].settings.params.steps_per_frame, mirrors[1].settings.params.steps_per_frame,
+            "each solver its own steps per frame"
+        );
+        for _ in 0..2 {
+            g.send(Command::StepFrame);
+        }
+        until(&g, &rx, &mut mirrors, |m, _| {
+            m.iter().all(|s| s.frames == 2)
+        });
+        each_equals_its_run(&mirrors, &sets, 2);
     }
 
     #[test]
