@@ -5,7 +5,8 @@
 //! (after [`escape`] joins split escape sequences); the one [`keymap::KEYMAP`] dispatches keys
 //! and generates the footer and the help; the one [`params::PARAMS`] table drives the
 //! parameter panel. The cloth steps on its own thread ([`worker`]), which owns the simulation
-//! clock; the loop in [`runner`] waits on one channel for keys, signals and the worker's
+//! clock (compare mode's variants on one coordinator that steps them in lockstep,
+//! [`lockstep`]); the loop in [`runner`] waits on one channel for keys, signals and the worker's
 //! snapshots, answers each at once and draws at most `--fps` times a second.
 
 mod compare;
@@ -13,6 +14,7 @@ mod escape;
 mod input;
 mod keymap;
 mod layout;
+mod lockstep;
 mod message;
 mod model;
 mod panes;
@@ -226,6 +228,7 @@ pub fn build_compare_in(
             variants.len()
         );
     }
+    check_compare_memory(&variants, args.ui.max_memory)?;
     let mut app = build_in(&args.ui, registry, is_tty, env)?;
     let mut variants = variants.into_iter();
     let Some(first) = variants.next() else {
@@ -246,9 +249,7 @@ pub fn build_compare_in(
             title: v.title,
             sent: sim.settings.clone(),
             sim,
-            worker: None,
             frame: None,
-            lagging: false,
         });
     }
     app.layout = model::Layout::Single;
@@ -263,8 +264,49 @@ pub fn build_compare_in(
         members,
         columns: args.vary[0].values.len().min(3),
         solver_varied,
+        group: None,
     });
     Ok(app)
+}
+
+/// Refuses a study whose variants together need more memory than `max` (or than is
+/// available): each variant holds its cloth, states and solver once (the UI's copies share the
+/// scene and hold no solver), and the panes share the renderer's buffers.
+fn check_compare_memory(
+    variants: &[crate::study::Variant],
+    max: Option<u64>,
+) -> anyhow::Result<()> {
+    let Some(first) = variants.first() else {
+        return Ok(());
+    };
+    let mut need = crate::memory::Need {
+        solver: 0,
+        cloth: 0,
+        drawing: 0,
+    };
+    let mut names: Vec<&str> = Vec::new();
+    for v in variants {
+        let n = crate::memory::ui_need(&v.choice.entry, &v.choice.options, &v.scene.mesh);
+        need.solver = need.solver.saturating_add(n.solver);
+        need.cloth = need.cloth.saturating_add(n.cloth);
+        need.drawing = need.drawing.max(n.drawing);
+        if !names.contains(&v.choice.entry.name()) {
+            names.push(v.choice.entry.name());
+        }
+    }
+    let who = format!(
+        "the {} solver{} run as {} variants",
+        names.join(" and "),
+        if names.len() > 1 { "s" } else { "" },
+        variants.len()
+    );
+    crate::memory::check(
+        &first.scene.origin,
+        &who,
+        &first.scene.mesh,
+        need,
+        (max, crate::memory::SMALLER_SCENE),
+    )
 }
 
 /// Runs compare mode until the user quits.

@@ -386,6 +386,46 @@ fn q_is_answered_within_half_a_second_on_a_1024_by_1024_cloth() {
     t.wait_for("the shell", ANSWER, |s| s.contains("exit=0"));
 }
 
+/// The status line's time in seconds, as shown (`0.022` of `t 0.022 s`).
+fn status_time(screen: &str) -> Option<String> {
+    let mut words = screen.lines().next()?.split_whitespace();
+    words.find(|w| *w == "t")?;
+    words.next().map(str::to_owned)
+}
+
+#[test]
+fn compare_answers_keys_at_once_while_big_variants_step() {
+    let Some(t) = Tmux::start("cmpbig", 160, 48) else {
+        return;
+    };
+    t.clothsim(
+        "compare pinned4 --set cloth.num_width_points=256 --set cloth.num_height_points=256 \
+         --vary cloth.ks=1000,5000,20000",
+    );
+    t.wait_for("the variants under way", START, |s| {
+        s.contains("RUNNING") && status_time(s).is_some_and(|t| t != "0.000")
+    });
+    let asked = Instant::now();
+    t.keys(&["Space"]);
+    t.wait_for("the pause", ANSWER, |s| s.contains("PAUSED"));
+    let took = asked.elapsed();
+    // NOTE: the screen is polled every 50 ms; half a second holds a key's tenth with the
+    // poll's and tmux's slack, while a frame of the three variants of 65,536 points each
+    // takes longer in a debug build.
+    assert!(
+        took < Duration::from_millis(500),
+        "space took {took:?} with three 256 x 256 variants"
+    );
+    // A reset is shown at once too, every variant back at the start on the one clock, though
+    // the frame in progress is still being stepped.
+    t.keys(&["r"]);
+    t.wait_for("the reset", ANSWER, |s| {
+        status_time(s).as_deref() == Some("0.000") && s.contains("reset")
+    });
+    t.keys(&["q"]);
+    t.wait_for("the shell", ANSWER, |s| s.contains("exit=0"));
+}
+
 #[test]
 fn the_stretch_limit_off_experiment_is_not_stopped() {
     let Some(t) = Tmux::start("stretch", 120, 40) else {

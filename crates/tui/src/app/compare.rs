@@ -1,32 +1,32 @@
 //! Compare mode (`clothsim compare SCENE --vary ...`): the variants of a study side by side.
 //!
-//! The app's own simulation ([`App::sim`]) is the first variant; the others are [`Member`]s,
-//! each a [`Simulation`] on its own [`Worker`]. Commands (pause, step, reset, resume) go to
-//! every variant; edits of the parameter panel go to every variant too, except for the values
-//! a variant's own key gives it, which it keeps. A variant that diverges stops alone.
+//! The app's own simulation ([`App::sim`]) is the first variant; the others are [`Member`]s.
+//! These are the UI's copies: one [`Lockstep`] coordinator steps all the variants frame by
+//! frame together on its own thread, and the UI adopts its snapshots, all at one frame (tests
+//! step the copies inline through the same [`lockstep::advance`]). Commands (pause, step,
+//! reset) go to every variant; edits of the parameter panel go to every variant too, except for
+//! the values a variant's own key gives it, which it keeps. A variant that diverges stops alone
+//! and the others go on; the time shown is the group's ([`Compare::clock`]).
 
 use cloth_mesh::StepParams;
 use cloth_render::AsciiFrame;
 
+use super::lockstep::{self, Lockstep};
 use super::model::App;
 use super::params::Settings;
 use super::sim::{Command, Simulation};
-use super::worker::Worker;
+use super::worker::Adopted;
 
 /// A variant other than the first.
 pub struct Member {
     /// `ks=5000`: its values.
     pub title: String,
-    /// Its simulation (the UI's copy when a worker steps it).
+    /// Its simulation (the UI's copy when the coordinator steps it).
     pub sim: Simulation,
-    /// The thread stepping it; `None` steps it inline (tests).
-    pub worker: Option<Worker>,
     /// Its rendered pane.
     pub frame: Option<AsciiFrame>,
     /// The settings last sent to it.
     pub sent: Settings,
-    /// Whether the worker was lagging behind real time at its last snapshot.
-    pub lagging: bool,
 }
 
 /// The study: the first variant's title, the varied keys and the other variants.
@@ -43,12 +43,23 @@ pub struct Compare {
     pub columns: usize,
     /// Whether the variants run different solvers (then a solver change is not shared).
     pub solver_varied: bool,
+    /// The thread stepping every variant in lockstep; `None` steps them inline (tests).
+    pub group: Option<Lockstep>,
 }
 
 impl Compare {
     /// How many variants there are.
     pub fn len(&self) -> usize {
         self.members.len() + 1
+    }
+
+    /// The group's frame and simulated time, s: that of the variants that have not stopped
+    /// (all at one frame), `first` being the first variant.
+    pub fn clock(&self, first: &Simulation) -> (u64, f64) {
+        let sims: Vec<&Simulation> = std::iter::once(first)
+            .chain(self.members.iter().map(|m| &m.sim))
+            .collect();
+        lockstep::frame_of(&sims)
     }
 }
 
@@ -91,19 +102,27 @@ pub fn settings_for(
 }
 
 impl App {
-    /// Sends `command` to every other variant (their workers, or their simulations inline).
+    /// Whether a thread steps the cloth: the worker, or in compare mode the coordinator.
+    pub fn threaded(&self) -> bool {
+        self.worker.is_some() || self.compare.as_ref().is_some_and(|c| c.group.is_some())
+    }
+
+    /// The coordinator stepping the variants, in compare mode once started.
+    pub fn group(&self) -> Option<&Lockstep> {
+        self.compare.as_ref().and_then(|c| c.group.as_ref())
+    }
+
+    /// Applies `command` to the other variants inline (no coordinator: tests).
     pub fn send_members(&mut self, command: &Command) {
         let Some(c) = &mut self.compare else {
             return;
         };
+        if c.group.is_some() {
+            return;
+        }
         for m in &mut c.members {
-            match &m.worker {
-                Some(w) => w.send(command.clone()),
-                None => {
-                    // NOTE: a failure inline (a stop) is kept in the member's fault.
-                    let _ = m.sim.apply(command.clone());
-                }
-            }
+            // NOTE: a failure inline (a stop) is kept in the member's fault.
+            let _ = m.sim.apply(command.clone());
         }
     }
 
@@ -116,24 +135,21 @@ impl App {
         let Some(c) = &mut self.compare else {
             return;
         };
-        for m in &mut c.members {
+        for (k, m) in c.members.iter_mut().enumerate() {
+            let mut commands = Vec::new();
             if !c.solver_varied && m.sim.entry().name() != name {
-                let command = Command::Solver(name.to_owned());
-                match &m.worker {
-                    Some(w) => w.send(command),
-                    None => {
-                        let _ = m.sim.apply(command);
-                    }
-                }
                 let _ = m.sim.set_solver(name);
+                commands.push(Command::Solver(name.to_owned()));
             }
             let wanted = settings_for(&shared, &base, &m.sim.scene.params, &m.sim.settings);
             if wanted != m.sent {
                 m.sent.clone_from(&wanted);
                 m.sim.settings.clone_from(&wanted);
-                let command = Command::Settings(wanted);
-                match &m.worker {
-                    Some(w) => w.send(command),
+                commands.push(Command::Settings(wanted));
+            }
+            for command in commands {
+                match &c.group {
+                    Some(g) => g.send_to(k + 1, command),
                     None => {
                         let _ = m.sim.apply(command);
                     }
@@ -142,37 +158,31 @@ impl App {
         }
     }
 
-    /// Takes in what the other variants' workers published.
-    pub fn adopt_members(&mut self) -> bool {
+    /// Takes in what the coordinator published into every variant's copy.
+    pub fn adopt_group(&mut self) -> Option<Adopted> {
+        let c = self.compare.as_mut()?;
+        let group = c.group.as_ref()?;
+        let mut mirrors: Vec<&mut Simulation> = std::iter::once(&mut self.sim)
+            .chain(c.members.iter_mut().map(|m| &mut m.sim))
+            .collect();
+        group.adopt_into(&mut mirrors)
+    }
+
+    /// Steps every variant inline through the end of the group's next frame, in lockstep
+    /// (tests: no coordinator); false when none is left to step.
+    pub fn step_group_inline(&mut self) -> bool {
         let Some(c) = &mut self.compare else {
             return false;
         };
-        let mut any = false;
-        for m in &mut c.members {
-            if let Some(w) = &m.worker
-                && let Some(got) = w.adopt_into(&mut m.sim)
-            {
-                m.lagging = got.rates.lagging;
-                any = true;
-            }
+        let (frame, _) = c.clock(&self.sim);
+        let mut sims: Vec<&mut Simulation> = std::iter::once(&mut self.sim)
+            .chain(c.members.iter_mut().map(|m| &mut m.sim))
+            .collect();
+        if sims.iter().all(|s| s.fault.is_some()) {
+            return false;
         }
-        any
-    }
-
-    /// Steps the other variants inline by what the first took (tests: no workers).
-    #[cfg(test)]
-    pub fn step_members_inline(&mut self, steps: u64) {
-        let Some(c) = &mut self.compare else {
-            return;
-        };
-        for m in &mut c.members {
-            if m.worker.is_none() {
-                for _ in 0..steps {
-                    if m.sim.step().is_err() {
-                        break;
-                    }
-                }
-            }
-        }
+        let never = std::sync::atomic::AtomicBool::new(false);
+        let threads = crate::study::threads_for(sims.len());
+        lockstep::advance(&mut sims, frame + 1, threads, &never)
     }
 }

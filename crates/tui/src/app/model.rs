@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use cloth_render::{AsciiFrame, Bounds, ColorDepth, Mode, Orbit, Renderer, View};
 
+use super::lockstep::Lockstep;
 use super::params::Settings;
 use super::sim::{Command, Simulation};
 use super::worker::{Rates, Worker};
@@ -335,9 +336,14 @@ impl App {
         self.sim.settings != self.saved.0 || self.sim.entry().name() != self.saved.1
     }
 
-    /// Tells the simulation's stepper: the worker when there is one, else the simulation
-    /// itself at once (whose errors are returned).
+    /// Tells the simulation's stepper: the worker (in compare mode the coordinator, for every
+    /// variant) when there is one, else the simulation itself at once (whose errors are
+    /// returned).
     pub fn send(&mut self, command: Command) -> Result<(), String> {
+        if let Some(g) = self.group() {
+            g.send(command);
+            return Ok(());
+        }
         self.send_members(&command);
         match &self.worker {
             Some(w) => {
@@ -348,48 +354,57 @@ impl App {
         }
     }
 
+    /// A copy of `sim` for a stepping thread, going on from its state with its live settings
+    /// and solver.
+    fn stepping_copy(sim: &Simulation) -> anyhow::Result<Simulation> {
+        let mut copy = Simulation::new(
+            std::sync::Arc::clone(&sim.scene),
+            sim.registry().clone(),
+            Some(sim.entry().name()),
+        )?;
+        copy.settings.clone_from(&sim.settings);
+        // The live solver options may differ from the scene's: build with the live ones.
+        copy.apply_options()?;
+        copy.start_from(sim.state.clone(), sim.frames, sim.time);
+        Ok(copy)
+    }
+
     /// Moves the stepping of the cloth to a worker thread (replacing any worker), going on
     /// from the cloth's state (the start positions, or the state `--from` gave) with the live
-    /// settings and solver.
+    /// settings and solver; in compare mode, every variant to one lockstep coordinator. The
+    /// thread's copies share the scenes (meshes included) with the UI's, and only they hold
+    /// a solver.
     ///
     /// # Errors
     /// When the solver cannot be built or the thread cannot start.
     pub fn start_worker(&mut self, notify: Notify) -> anyhow::Result<()> {
-        let mut sim = Simulation::new(
-            self.sim.scene.clone(),
-            self.sim.registry().clone(),
-            Some(self.sim.entry().name()),
-        )?;
-        sim.settings.clone_from(&self.sim.settings);
-        // The live solver options may differ from the scene's: build with the live ones.
-        sim.apply_options()?;
-        sim.start_from(self.sim.state.clone(), self.sim.frames, self.sim.time);
-        let n = std::sync::Arc::clone(&notify);
-        self.worker = Some(Worker::spawn(
-            sim,
-            self.running,
-            self.rate(),
-            Box::new(move || n()),
-        )?);
         self.sent = (self.sim.settings.clone(), self.sim.entry().name());
+        let n = std::sync::Arc::clone(&notify);
         if let Some(c) = &mut self.compare {
-            for m in &mut c.members {
-                let mut sim = Simulation::new(
-                    m.sim.scene.clone(),
-                    m.sim.registry().clone(),
-                    Some(m.sim.entry().name()),
-                )?;
-                sim.settings.clone_from(&m.sim.settings);
-                sim.apply_options()?;
-                let n = std::sync::Arc::clone(&notify);
-                m.worker = Some(Worker::spawn(
-                    sim,
-                    self.running,
-                    RATES[self.rate],
-                    Box::new(move || n()),
-                )?);
+            let mut sims = vec![Self::stepping_copy(&self.sim)?];
+            for m in &c.members {
+                sims.push(Self::stepping_copy(&m.sim)?);
             }
+            let threads = crate::study::threads_for(sims.len());
+            c.group = Some(Lockstep::spawn(
+                sims,
+                self.running,
+                RATES[self.rate],
+                threads,
+                Box::new(move || n()),
+            )?);
+            for m in &mut c.members {
+                m.sim.release_solver();
+            }
+        } else {
+            self.worker = Some(Worker::spawn(
+                Self::stepping_copy(&self.sim)?,
+                self.running,
+                self.rate(),
+                Box::new(move || n()),
+            )?);
         }
+        self.sim.release_solver();
         self.notify = Some(notify);
         Ok(())
     }
@@ -402,23 +417,31 @@ impl App {
             .map(super::recording::Recording::finish)
     }
 
-    /// Sends the worker the live settings and solver if they changed since last sent.
+    /// Sends the worker (the coordinator, for the first variant) the live settings and solver
+    /// if they changed since last sent.
     pub fn sync(&mut self) {
         self.sync_members();
-        let Some(w) = &self.worker else {
+        if !self.threaded() {
             return;
-        };
+        }
         // NOTE: the solver goes first: the options in the settings are the new solver's, and
         // the worker's solver switch resets them to the scene's, which the settings then set.
         let name = self.sim.entry().name();
+        let mut commands = Vec::new();
         if name != self.sent.1 {
             self.sent.1 = name;
-            w.send(Command::Solver(name.to_owned()));
+            commands.push(Command::Solver(name.to_owned()));
+        }
+        if !commands.is_empty() || self.sim.settings != self.sent.0 {
             self.sent.0.clone_from(&self.sim.settings);
-            w.send(Command::Settings(self.sim.settings.clone()));
-        } else if self.sim.settings != self.sent.0 {
-            self.sent.0.clone_from(&self.sim.settings);
-            w.send(Command::Settings(self.sim.settings.clone()));
+            commands.push(Command::Settings(self.sim.settings.clone()));
+        }
+        for command in commands {
+            match (self.group(), &self.worker) {
+                (Some(g), _) => g.send_to(0, command),
+                (None, Some(w)) => w.send(command),
+                (None, None) => {}
+            }
         }
     }
 

@@ -27,8 +27,11 @@ use super::model::{App, Level};
 pub const DISPLAY_SIDE: usize = 128;
 
 /// A coarser copy of a big cloth for drawing: every k-th point (the edges and corners
-/// included), with the pins moved to their nearest drawn point.
+/// included), with the pins moved to their nearest drawn point. Compare mode draws every
+/// variant of one grid through one display, its positions gathered pane by pane.
 pub struct Display {
+    /// The grid of the cloth it draws.
+    source: GridSpec,
     /// The coarse grid.
     pub mesh: ClothMesh,
     /// The cloth's index of each coarse point.
@@ -66,7 +69,17 @@ impl Display {
             .map(|(x, y)| full.index(to_full(x, mw, nw), to_full(y, mh, nh)))
             .collect();
         let state = ClothState::new(&mesh);
-        Some(Self { mesh, pick, state })
+        Some(Self {
+            source: spec.clone(),
+            mesh,
+            pick,
+            state,
+        })
+    }
+
+    /// Whether it draws cloths of `full`'s grid.
+    pub fn draws(&self, full: &ClothMesh) -> bool {
+        self.source == *full.spec()
     }
 
     /// Gathers the drawn points' positions from the cloth's.
@@ -143,14 +156,24 @@ pub fn prepare(app: &mut App, area: Rect) {
 
 /// Compare mode: renders every variant into its pane with the focused pane's view, all fitted
 /// to one extent (the union over the variants and the run), so their shapes compare honestly.
+/// The panes share the renderer's scratch buffers and, for a big cloth, one [`Display`] (the
+/// variants of a study mostly share their grid).
 fn prepare_compare(app: &mut App, rects: &[Rect]) {
-    let Some(c) = &mut app.compare else {
+    let App {
+        sim: first,
+        compare,
+        display,
+        renderer,
+        extent,
+        ..
+    } = app;
+    let Some(c) = compare else {
         return;
     };
-    let sims = std::iter::once(&app.sim).chain(c.members.iter().map(|m| &m.sim));
+    let sims = std::iter::once(&*first).chain(c.members.iter().map(|m| &m.sim));
     for sim in sims {
         if let Ok(b) = Bounds::of_scene(&sim.state.positions, &sim.settings.colliders) {
-            app.extent = Some(app.extent.map_or(b, |e| e.union(&b)));
+            *extent = Some(extent.map_or(b, |e| e.union(&b)));
         }
     }
     let options = RenderOptions {
@@ -160,7 +183,7 @@ fn prepare_compare(app: &mut App, rects: &[Rect]) {
     };
     let view = app.views[app.focus];
     let mut errors = Vec::new();
-    let frames = std::iter::once((&app.sim, &mut c.frame))
+    let frames = std::iter::once((&*first, &mut c.frame))
         .chain(c.members.iter_mut().map(|m| (&m.sim, &mut m.frame)));
     for (i, ((sim, slot), rect)) in frames.zip(rects).enumerate() {
         let inside = inner(*rect);
@@ -168,10 +191,21 @@ fn prepare_compare(app: &mut App, rects: &[Rect]) {
             *slot = None;
             continue;
         };
-        let mut spec = ViewSpec::new(view, &sim.scene.mesh);
+        let full = &sim.scene.mesh;
+        if display.as_ref().is_none_or(|d| !d.draws(full)) {
+            *display = Display::for_mesh(full);
+        }
+        let (mesh, state) = match display {
+            Some(d) => {
+                d.update(&sim.state.positions);
+                (&d.mesh, &d.state)
+            }
+            None => (full, &sim.state),
+        };
+        let mut spec = ViewSpec::new(view, mesh);
         spec.orbit = app.orbit;
         if view != View::Orbit
-            && let Some(e) = app.extent
+            && let Some(e) = *extent
         {
             spec.extent = Extent::Fixed(e);
         }
@@ -179,14 +213,9 @@ fn prepare_compare(app: &mut App, rects: &[Rect]) {
         if frame.size() != size {
             frame.resize(size);
         }
-        if let Err(e) = app.renderer.render(
-            &sim.scene.mesh,
-            &sim.state,
-            &sim.settings.colliders,
-            &spec,
-            &options,
-            frame,
-        ) {
+        if let Err(e) =
+            renderer.render(mesh, state, &sim.settings.colliders, &spec, &options, frame)
+        {
             *slot = None;
             errors.push(format!("cannot draw variant {}: {e}", i + 1));
         }

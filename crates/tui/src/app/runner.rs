@@ -2,7 +2,8 @@
 //! and handles signals.
 //!
 //! Three sources feed one channel: a thread reading terminal events, a thread receiving
-//! signals, and the simulation's worker saying it has a new snapshot. The loop waits on the
+//! signals, and the simulation's worker (in compare mode, the coordinator of the variants)
+//! saying it has a new snapshot. The loop waits on the
 //! channel (or until a frame or a held Esc is due), so a key is answered as soon as it
 //! arrives whatever the cloth's size: the loop itself only renders and draws.
 //!
@@ -223,6 +224,9 @@ fn event_loop(
             && app.sim.fault.is_none()
         {
             anyhow::bail!("the simulation's thread stopped unexpectedly");
+        }
+        if app.group().is_some_and(|g| !g.alive()) {
+            anyhow::bail!("the thread stepping the variants stopped unexpectedly");
         }
 
         let now = Instant::now();

@@ -1,10 +1,11 @@
 //! The running cloth: scene, live settings, state, solver, simulated clock and diagnostics.
 //!
-//! Time here is simulated time only. Whoever steps it (a [`super::worker::Worker`], or a test)
-//! decides how many steps to take; nothing in this module reads a clock, so the same calls give
+//! Time here is simulated time only. Whoever steps it (a [`super::worker::Worker`], compare
+//! mode's [`super::lockstep::Lockstep`], or a test) decides how many steps to take; nothing in this module reads a clock, so the same calls give
 //! the same bits. Each frame ends with the divergence guard ([`crate::guard`]).
 
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 use cloth_mesh::ClothState;
 use cloth_scene::Scene;
@@ -73,15 +74,18 @@ pub enum Command {
 
 /// The running cloth.
 pub struct Simulation {
-    /// The scene as loaded (its values are what "restore" goes back to).
-    pub scene: Scene,
+    /// The scene as loaded (its values are what "restore" goes back to), shared with the
+    /// copies of this simulation that a stepping thread runs: one mesh for both.
+    pub scene: Arc<Scene>,
     /// Live parameters and objects.
     pub settings: Settings,
     /// The cloth's positions: the one source of truth.
     pub state: ClothState,
     /// The state at the end of the last good frame, shown after a failure.
     last_good: ClothState,
-    solver: Box<dyn Solver>,
+    /// The solver; `None` in the UI's copy of a simulation that a thread steps, so its scratch
+    /// (a factorisation, for the implicit solvers) is held once, by the thread's copy.
+    solver: Option<Box<dyn Solver>>,
     /// The solvers the user can switch between.
     registry: Registry,
     /// The active solver's entry and the options it was built with.
@@ -113,7 +117,12 @@ impl Simulation {
     ///
     /// # Errors
     /// When the solver is not registered or refuses the scene's options for it.
-    pub fn new(scene: Scene, registry: Registry, name: Option<&str>) -> anyhow::Result<Self> {
+    pub fn new(
+        scene: impl Into<Arc<Scene>>,
+        registry: Registry,
+        name: Option<&str>,
+    ) -> anyhow::Result<Self> {
+        let scene = scene.into();
         let choice = solvers::choose(&registry, &scene, name)?;
         let built = choice.build(&scene.mesh)?;
         let state = ClothState::new(&scene.mesh);
@@ -130,7 +139,7 @@ impl Simulation {
             state,
             settings,
             scene,
-            solver: built,
+            solver: Some(built),
             registry,
             choice,
             time: 0.0,
@@ -211,7 +220,10 @@ impl Simulation {
     /// When `name` is not registered or the solver cannot be built; the current solver stays.
     pub fn set_solver(&mut self, name: &str) -> anyhow::Result<()> {
         let choice = solvers::choose(&self.registry, &self.scene, Some(name))?;
-        self.solver = choice.build(&self.scene.mesh)?;
+        let built = choice.build(&self.scene.mesh)?;
+        if self.solver.is_some() {
+            self.solver = Some(built);
+        }
         let follow = self.steps_follow_solver();
         self.settings.options = numeric_options(&choice.entry, &choice.options);
         self.choice = choice;
@@ -219,6 +231,19 @@ impl Simulation {
             self.settings.params.steps_per_frame = solvers::steps_for(&self.scene, self.entry());
         }
         Ok(())
+    }
+
+    /// Drops the solver: this is the UI's copy of a simulation that a thread steps (with its
+    /// own solver), and it is never stepped. A change of solver or options is still checked by
+    /// building the solver, which is then dropped.
+    pub fn release_solver(&mut self) {
+        self.solver = None;
+    }
+
+    /// Whether this copy holds a solver (see [`Self::release_solver`]).
+    #[cfg(test)]
+    pub fn has_solver(&self) -> bool {
+        self.solver.is_some()
     }
 
     /// Whether the steps per frame are the ones the scene gives the active solver (its
@@ -287,7 +312,9 @@ impl Simulation {
         };
         match choice.build(&self.scene.mesh) {
             Ok(solver) => {
-                self.solver = solver;
+                if self.solver.is_some() {
+                    self.solver = Some(solver);
+                }
                 self.choice = choice;
                 Ok(())
             }
@@ -303,7 +330,9 @@ impl Simulation {
     pub fn start_from(&mut self, state: ClothState, frames: u64, time: f64) {
         self.state = state;
         self.last_good.clone_from(&self.state);
-        self.solver.reset();
+        if let Some(s) = &mut self.solver {
+            s.reset();
+        }
         self.time = time;
         self.frames = frames;
         self.steps = frames.saturating_mul(u64::from(self.settings.params.steps_per_frame));
@@ -321,7 +350,9 @@ impl Simulation {
     pub fn reset(&mut self) {
         self.state.reset(&self.scene.mesh);
         self.last_good.clone_from(&self.state);
-        self.solver.reset();
+        if let Some(s) = &mut self.solver {
+            s.reset();
+        }
         self.time = 0.0;
         self.steps = 0;
         self.frames = 0;
@@ -389,7 +420,16 @@ impl Simulation {
             return Err(f.clone());
         }
         let dt = self.dt();
-        let result = self.solver.step(
+        let Some(solver) = &mut self.solver else {
+            let fault = Fault {
+                time: self.time,
+                what: "the UI's copy of the cloth has no solver: a thread steps it".to_owned(),
+                advice: "this is a fault of clothsim; please report it".to_owned(),
+                resumable: false,
+            };
+            return Err(self.stop(fault));
+        };
+        let result = solver.step(
             &self.scene.mesh,
             &self.settings.colliders,
             &self.settings.params,

@@ -1210,6 +1210,16 @@ fn a_diverging_variant_stops_alone_and_greyed_with_its_reason() {
     assert!(sims[1].fault.is_none(), "the other goes on");
     assert!(sims[1].frames > sims[0].frames, "and is further on");
     assert_eq!(app.overlay, Overlay::None, "no box stops the others");
+    let note = app
+        .note
+        .as_ref()
+        .map(|n| n.text.clone())
+        .unwrap_or_default();
+    assert!(
+        note.contains("density=0.1 stopped at") && note.contains("the others go on"),
+        "{note}"
+    );
+    assert!(app.running, "the group runs on");
     let screen = screen(&mut app, 160, 48);
     assert!(screen.contains("stopped at"), "{screen}");
 }
@@ -1246,4 +1256,142 @@ fn two_axes_compare_as_a_grid_of_at_most_three_by_three() {
     .map(|e| e.to_string())
     .unwrap_or_default();
     assert!(e.contains("grid of up to 3 x 3"), "{e}");
+}
+
+#[test]
+fn compare_keys_act_on_every_variant_through_the_one_coordinator() {
+    let mut app = compare_with("pinned4", &["cloth.ks=1,5000,100000"]);
+    app.running = false;
+    let (tx, rx) = std::sync::mpsc::channel();
+    let tx = std::sync::Mutex::new(tx);
+    app.start_worker(std::sync::Arc::new(move || {
+        let _ = tx.lock().unwrap().send(());
+    }))
+    .unwrap();
+    assert!(app.threaded() && app.worker.is_none(), "one coordinator");
+    assert!(
+        compared(&app).iter().all(|s| !s.has_solver()),
+        "the UI's copies hold no solver: the coordinator's do"
+    );
+    let wait_for = |app: &mut App, done: &dyn Fn(&App) -> bool| {
+        while !done(app) {
+            rx.recv_timeout(Duration::from_secs(120))
+                .expect("a snapshot within two minutes");
+            update::adopt(app);
+        }
+    };
+    press(&mut app, KeyCode::Char('n'));
+    press(&mut app, KeyCode::Char('n'));
+    wait_for(&mut app, &|a| compared(a).iter().all(|s| s.frames == 2));
+    let screen = screen(&mut app, 160, 48);
+    // Two frames at 90 frames/s: the group's one time.
+    assert!(screen.contains("PAUSED 1x  t 0.022 s"), "{screen}");
+
+    press(&mut app, KeyCode::Char('r'));
+    assert!(
+        compared(&app)
+            .iter()
+            .all(|s| s.frames == 0 && s.time == 0.0),
+        "every pane shows the reset at once"
+    );
+    press(&mut app, KeyCode::Char(' '));
+    assert!(app.running);
+    wait_for(&mut app, &|a| a.sim.frames >= 5);
+    press(&mut app, KeyCode::Char(' '));
+    assert!(!app.running);
+    // The first snapshot taken after the pause (older ones are refused) is the last.
+    loop {
+        rx.recv_timeout(Duration::from_secs(120))
+            .expect("a snapshot within two minutes");
+        if update::adopt(&mut app) {
+            break;
+        }
+    }
+    let frames = app.sim.frames;
+    std::thread::sleep(Duration::from_millis(100));
+    update::adopt(&mut app);
+    assert!(
+        compared(&app).iter().all(|s| s.frames == frames),
+        "paused: nothing moves, and all stand at frame {frames}"
+    );
+}
+
+#[test]
+fn the_variants_of_a_big_cloth_are_drawn_through_one_coarse_grid() {
+    let args = super::CompareArgs {
+        ui: Args {
+            scene: "pinned4".to_owned(),
+            sets: vec![
+                "cloth.num_width_points=300".to_owned(),
+                "cloth.num_height_points=300".to_owned(),
+            ],
+            ..Args::default()
+        },
+        vary: vec!["cloth.damping=0.2,1".parse().unwrap()],
+    };
+    let mut app = super::build_compare_in(
+        &args,
+        &crate::default_registry(),
+        false,
+        &cloth_render::ColorEnv::default(),
+    )
+    .unwrap();
+    let screen = screen(&mut app, 160, 48);
+    let display = app.display.as_ref().expect("a big cloth is drawn coarser");
+    assert_eq!(display.mesh.nw(), panes::DISPLAY_SIDE);
+    let c = app.compare.as_ref().unwrap();
+    assert!(
+        display.draws(&c.members[0].sim.scene.mesh),
+        "one grid for both"
+    );
+    assert!(
+        c.frame.is_some() && c.members[0].frame.is_some(),
+        "{screen}"
+    );
+}
+
+#[test]
+fn varied_values_too_long_for_the_panel_end_in_an_ellipsis() {
+    let mut app = compare_with("pinned4", &["cloth.ks=1,5000,20000,100000"]);
+    let screen = screen(&mut app, 160, 48);
+    let row = screen
+        .lines()
+        .find(|l| l.contains("│ ks "))
+        .expect("the ks row");
+    assert!(row.contains("1,5000,20000,…"), "{row}");
+}
+
+#[test]
+fn a_study_is_refused_when_its_variants_together_need_more_memory_than_allowed() {
+    let scene = cloth_scene::load("pinned4", &[]).unwrap();
+    let registry = crate::default_registry();
+    let choice = crate::solvers::choose(&registry, &scene, None).unwrap();
+    let one = crate::memory::ui_need(&choice.entry, &choice.options, &scene.mesh);
+    // Room for the panes' one drawing and the cloths and solvers of one variant and a half:
+    // one alone opens, three do not.
+    let max = Some(one.total() + one.solver / 2 + one.cloth / 2);
+    let args = |vary: &str| super::CompareArgs {
+        ui: Args {
+            max_memory: max,
+            ..Args::default()
+        },
+        vary: vec![vary.parse().unwrap()],
+    };
+    let env = cloth_render::ColorEnv::default();
+    let e = super::build_compare_in(&args("cloth.ks=1,5000,100000"), &registry, false, &env)
+        .err()
+        .map(|e| format!("{e:#}"))
+        .unwrap_or_default();
+    assert!(
+        e.contains("run as 3 variants") && e.contains("--max-memory"),
+        "{e}"
+    );
+    let ui = Args {
+        max_memory: max,
+        ..Args::default()
+    };
+    assert!(
+        build_in(&ui, &registry, false, &env).is_ok(),
+        "one variant fits"
+    );
 }

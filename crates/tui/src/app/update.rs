@@ -277,7 +277,8 @@ pub fn update(app: &mut App, msg: Message) {
         Message::Resize { width, height } => app.screen = (width, height),
         #[cfg(test)]
         Message::Tick(wall) => {
-            if app.worker.is_none() && app.running && app.sim.fault.is_none() {
+            if !app.threaded() && app.running && (app.sim.fault.is_none() || app.compare.is_some())
+            {
                 app.debt += wall.as_secs_f64() * app.rate();
             }
         }
@@ -290,11 +291,24 @@ pub fn update(app: &mut App, msg: Message) {
 #[cfg(test)]
 pub fn run_owed(app: &mut App, more: &mut dyn FnMut() -> bool) -> u64 {
     let mut n = 0;
+    if app.compare.is_some() {
+        // Compare mode pays the group's time a frame at a time, every variant in lockstep.
+        let span = 1.0 / app.sim.settings.params.frames_per_sec;
+        let before = faults(app);
+        while app.running && app.debt >= span && more() {
+            app.debt -= span;
+            n += 1;
+            if !app.step_group_inline() {
+                break;
+            }
+        }
+        stopped_variants(app, &before);
+        return n;
+    }
     while app.running && app.debt >= app.sim.dt() && more() {
         app.debt -= app.sim.dt();
         n += 1;
-        app.step_members_inline(1);
-        if app.sim.step().is_err() && app.compare.is_none() {
+        if app.sim.step().is_err() {
             stopped(app);
             break;
         }
@@ -316,14 +330,10 @@ pub fn hint_order(app: &mut App) {
     }
 }
 
-/// The simulation failed: pause and explain. In compare mode the first variant stops alone,
-/// greyed with its reason, as the others do: the rest go on.
+/// The simulation failed: pause and explain. (In compare mode a variant stops alone, greyed
+/// with its reason: see [`stopped_variants`].)
 fn stopped(app: &mut App) {
     if app.compare.is_some() {
-        if let Some(f) = &app.sim.fault {
-            let text = format!("the first variant stopped: {}; r resets all", f.what);
-            app.say(Level::Warn, text);
-        }
         return;
     }
     app.running = false;
@@ -357,7 +367,9 @@ fn send_run(app: &mut App) {
 }
 
 fn toggle_pause(app: &mut App) {
-    if app.sim.fault.is_some() {
+    // NOTE: in compare mode a stopped variant waits for a reset (the others stay at one
+    // frame), so space only pauses and resumes the group.
+    if app.sim.fault.is_some() && app.compare.is_none() {
         resume_anyway(app);
         return;
     }
@@ -399,12 +411,19 @@ fn resume_anyway(app: &mut App) {
 fn step_frame(app: &mut App) {
     app.running = false;
     app.debt = 0.0;
-    if app.worker.is_some() {
+    if app.threaded() {
         let _ = app.send(Command::StepFrame);
         app.step_note = true;
         return;
     }
-    app.send_members(&Command::StepFrame);
+    if app.compare.is_some() {
+        let before = faults(app);
+        app.step_group_inline();
+        if !stopped_variants(app, &before) {
+            say_frame(app);
+        }
+        return;
+    }
     if app.sim.step_frame().is_err() {
         stopped(app);
     } else {
@@ -412,31 +431,106 @@ fn step_frame(app: &mut App) {
     }
 }
 
-/// "one frame: t = ..." after a single frame.
+/// "one frame: t = ..." after a single frame (the group's time in compare mode).
 pub fn say_frame(app: &mut App) {
+    let (frames, time) = match &app.compare {
+        Some(c) => c.clock(&app.sim),
+        None => (app.sim.frames, app.sim.time),
+    };
     app.say(
         Level::Info,
-        format!(
-            "one frame: t = {:.4} s (frame {})",
-            app.sim.time, app.sim.frames
-        ),
+        format!("one frame: t = {time:.4} s (frame {frames})"),
     );
+}
+
+/// Which variants have stopped (compare mode), in the study's order.
+fn faults(app: &App) -> Vec<bool> {
+    let Some(c) = &app.compare else {
+        return Vec::new();
+    };
+    std::iter::once(&app.sim)
+        .chain(c.members.iter().map(|m| &m.sim))
+        .map(|s| s.fault.is_some())
+        .collect()
+}
+
+/// Compare mode: says which variant stopped since `before` (which variants had), and that the
+/// others go on; when none is left, the group pauses. True when one stopped.
+fn stopped_variants(app: &mut App, before: &[bool]) -> bool {
+    let Some(c) = &app.compare else {
+        return false;
+    };
+    let sims = std::iter::once((c.title.as_str(), &app.sim))
+        .chain(c.members.iter().map(|m| (m.title.as_str(), &m.sim)));
+    let mut newly = None;
+    let mut live = 0;
+    for (k, (title, sim)) in sims.enumerate() {
+        match &sim.fault {
+            Some(f) if !before.get(k).copied().unwrap_or(false) => {
+                newly = Some(format!(
+                    "{title} stopped at t = {:.2} s: {}",
+                    f.time, f.what
+                ));
+            }
+            Some(_) => {}
+            None => live += 1,
+        }
+    }
+    let Some(text) = newly else {
+        return false;
+    };
+    if live == 0 {
+        app.running = false;
+        app.say(
+            Level::Warn,
+            format!("{text}; every variant has stopped: r resets all"),
+        );
+    } else {
+        app.say(
+            Level::Warn,
+            format!("{text}; the others go on (r resets all)"),
+        );
+    }
+    true
+}
+
+/// Takes in what the coordinator published (compare mode): every variant, the group's rates
+/// and any stop.
+fn adopt_group(app: &mut App) -> bool {
+    let before = faults(app);
+    let Some(got) = app.adopt_group() else {
+        return false;
+    };
+    app.stats.rates = got.rates;
+    for e in got.errors {
+        app.say(Level::Error, e);
+    }
+    let stopped = stopped_variants(app, &before);
+    if !got.running && app.running {
+        // The group paused by itself: to step a frame, or every variant stopped.
+        app.running = false;
+    }
+    if app.step_note {
+        app.step_note = false;
+        if !stopped {
+            say_frame(app);
+        }
+    }
+    true
 }
 
 /// Takes in what the worker published: the cloth, its clock and any stop.
 pub fn adopt(app: &mut App) -> bool {
-    let members = app.adopt_members();
+    if app.compare.is_some() {
+        return adopt_group(app);
+    }
     let Some(w) = &app.worker else {
-        return members;
+        return false;
     };
     let Some(got) = w.adopt_into(&mut app.sim) else {
-        return members;
+        return false;
     };
     app.stats.rates = got.rates;
-    if let Some(c) = &app.compare {
-        // The status says "lagging" when any variant cannot keep real time.
-        app.stats.rates.lagging |= c.members.iter().any(|m| m.lagging);
-    }
     for e in got.errors {
         app.say(Level::Error, e);
     }
@@ -459,10 +553,14 @@ pub fn adopt(app: &mut App) -> bool {
 }
 
 fn reset(app: &mut App) {
-    if app.worker.is_some() {
+    if app.threaded() {
         let _ = app.send(Command::Reset);
-    } else {
-        app.send_members(&Command::Reset);
+    }
+    // The UI's copies too, so no pane shows the old run until the next snapshot.
+    if let Some(c) = &mut app.compare {
+        for m in &mut c.members {
+            m.sim.reset();
+        }
     }
     app.sim.reset();
     app.debt = 0.0;

@@ -10,8 +10,9 @@
 //! The UI asks for a snapshot when it is ready to draw ([`Worker::adopt_into`]); the worker
 //! publishes one after the next step (and at once after a stop or a single frame), swapping
 //! position buffers rather than allocating, so a big cloth costs one copy per drawn frame.
-//! Nothing here knows of the terminal: several workers can run side by side, each notifying
-//! the same loop.
+//! Nothing here knows of the terminal. The exchange of snapshots ([`Mailbox`]), the snapshot of
+//! one cloth ([`Cloth`], filled by a [`Publisher`]) and the rate [`Meter`] serve compare mode's
+//! lockstep coordinator too ([`super::lockstep`]).
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
@@ -27,10 +28,10 @@ use super::sim::{Command, Simulation};
 pub const MAX_DEBT: Duration = Duration::from_millis(250);
 
 /// How often the rates are measured.
-const WINDOW: Duration = Duration::from_secs(1);
+pub const WINDOW: Duration = Duration::from_secs(1);
 
 /// Longest a paused worker sleeps before looking at its stop flag again.
-const IDLE: Duration = Duration::from_millis(500);
+pub const IDLE: Duration = Duration::from_millis(500);
 
 /// How fast a worker runs, measured over about a second of wall time.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -56,24 +57,86 @@ pub struct Adopted {
     pub rates: Rates,
 }
 
-/// What the worker published: everything the UI shows of the running cloth.
+/// One cloth's part of a snapshot: everything the UI shows of a running simulation, which its
+/// mirror (the UI's copy) takes in.
 #[derive(Debug, Default)]
-struct Published {
+pub struct Cloth {
     /// Positions at the end of the last step taken.
     positions: Vec<cloth_solver::Vec3>,
     time: f64,
     steps: u64,
     frames: u64,
     history: std::collections::VecDeque<super::sim::Sample>,
-    /// Rows of the worker's record not yet adopted, which start at this index of it.
+    /// Rows of the stepping side's record not yet adopted, which start at this index of it.
     rows_from: usize,
     new_rows: Vec<crate::export::StatsRow>,
     peak_kinetic: f64,
     fault: Option<super::sim::Fault>,
+}
+
+impl Cloth {
+    /// Moves this snapshot into `mirror`, whose settings, scene and solver the UI owns.
+    pub fn adopt_into(&mut self, mirror: &mut Simulation) {
+        std::mem::swap(&mut mirror.state.positions, &mut self.positions);
+        mirror.time = self.time;
+        mirror.steps = self.steps;
+        mirror.frames = self.frames;
+        mirror.history.clone_from(&self.history);
+        mirror.record.truncate(self.rows_from);
+        mirror.record.append(&mut self.new_rows);
+        mirror.peak_kinetic = self.peak_kinetic;
+        mirror.fault.clone_from(&self.fault);
+    }
+}
+
+/// The stepping side's part in publishing one simulation: the buffer the next snapshot's
+/// positions are copied into, and how much of the record was published.
+#[derive(Debug, Default)]
+pub struct Publisher {
+    spare: Vec<cloth_solver::Vec3>,
+    /// The record's generation and length at the last snapshot.
+    published: (u64, usize),
+}
+
+impl Publisher {
+    /// Copies `sim`'s positions into the spare buffer: done before taking the lock, so the UI
+    /// never waits on a big cloth's copy.
+    pub fn copy(&mut self, sim: &Simulation) {
+        self.spare.clone_from(&sim.state.positions);
+    }
+
+    /// Fills `p` (under the lock) from `sim`, handing over the positions copied last.
+    pub fn fill(&mut self, sim: &Simulation, p: &mut Cloth) {
+        std::mem::swap(&mut p.positions, &mut self.spare);
+        p.time = sim.time;
+        p.steps = sim.steps;
+        p.frames = sim.frames;
+        p.history.clone_from(&sim.history);
+        // NOTE: only the rows since the last snapshot travel, so a long run's table is
+        // copied once, not at every draw; a reset starts the table again.
+        if sim.generation != self.published.0 {
+            self.published = (sim.generation, 0);
+            p.new_rows.clear();
+        }
+        if p.new_rows.is_empty() {
+            p.rows_from = self.published.1;
+        }
+        let from = self.published.1.min(sim.record.len());
+        p.new_rows.extend_from_slice(&sim.record[from..]);
+        self.published.1 = sim.record.len();
+        p.peak_kinetic = sim.peak_kinetic;
+        p.fault.clone_from(&sim.fault);
+    }
+}
+
+/// What a stepping thread published: `C`, the cloth (or the cloths), and the news.
+#[derive(Debug, Default)]
+struct Published<C> {
+    cloth: C,
     /// Whether simulated time is advancing (a stop pauses it).
     running: bool,
     rates: Rates,
-    /// Set by the worker when this is newer than what the UI last adopted.
+    /// Set by the thread when this is newer than what the UI last adopted.
     fresh: bool,
     /// Errors of commands, for the message line.
     errors: Vec<String>,
@@ -81,20 +144,112 @@ struct Published {
     applied: u64,
 }
 
-struct Shared {
-    published: Mutex<Published>,
+/// Where a stepping thread leaves its snapshots of `C` (a [`Cloth`], or compare mode's one per
+/// variant) and the UI takes them: the one exchange between the two, with the UI's wish for the
+/// next snapshot, its count of commands sent and its leaving.
+pub struct Mailbox<C> {
+    published: Mutex<Published<C>>,
     /// The UI wants the next state (it has drawn the last one).
     wanted: AtomicBool,
     /// The UI is gone: end the thread.
     stop: AtomicBool,
+    /// Commands sent so far: a snapshot taken before the thread applied them all is stale.
+    sent: AtomicU64,
+}
+
+impl<C: Default> Mailbox<C> {
+    /// An empty mailbox holding `cloth` to fill.
+    pub fn new(cloth: C) -> Arc<Self> {
+        Arc::new(Self {
+            published: Mutex::new(Published {
+                cloth,
+                ..Published::default()
+            }),
+            wanted: AtomicBool::new(true),
+            stop: AtomicBool::new(false),
+            sent: AtomicU64::new(0),
+        })
+    }
+}
+
+impl<C> Mailbox<C> {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Published<C>> {
+        self.published
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// The UI's side: counts a command sent.
+    pub fn count_sent(&self) {
+        self.sent.fetch_add(1, Ordering::AcqRel);
+    }
+
+    /// The UI's side: hands the newest snapshot to `adopt` and asks for the next; `None` when
+    /// nothing new arrived.
+    pub fn take(&self, adopt: impl FnOnce(&mut C)) -> Option<Adopted> {
+        let mut p = self.lock();
+        if !p.fresh {
+            return None;
+        }
+        p.fresh = false;
+        if p.applied < self.sent.load(Ordering::Acquire) {
+            // Taken before the thread saw the latest commands (a reset, a pause): showing it
+            // would undo them on screen for a moment. The next one follows.
+            drop(p);
+            self.wanted.store(true, Ordering::Release);
+            return None;
+        }
+        adopt(&mut p.cloth);
+        let adopted = Adopted {
+            running: p.running,
+            errors: std::mem::take(&mut p.errors),
+            rates: p.rates,
+        };
+        drop(p);
+        self.wanted.store(true, Ordering::Release);
+        Some(adopted)
+    }
+
+    /// The UI's side: it is gone; the thread ends at its next look.
+    pub fn leave(&self) {
+        self.stop.store(true, Ordering::Release);
+    }
+
+    /// The thread's side: whether the UI is gone.
+    pub fn left(&self) -> bool {
+        self.stop.load(Ordering::Acquire)
+    }
+
+    /// The thread's side: whether the UI has drawn the last snapshot and wants the next.
+    pub fn wanted(&self) -> bool {
+        self.wanted.load(Ordering::Acquire)
+    }
+
+    /// The thread's side: publishes, `fill` writing the cloth under the lock (copy big
+    /// buffers before, so the UI never waits on them), with the news.
+    pub fn put(
+        &self,
+        running: bool,
+        rates: Rates,
+        errors: &mut Vec<String>,
+        applied: u64,
+        fill: impl FnOnce(&mut C),
+    ) {
+        self.wanted.store(false, Ordering::Release);
+        let mut p = self.lock();
+        fill(&mut p.cloth);
+        p.running = running;
+        p.rates = rates;
+        p.errors.append(errors);
+        p.applied = applied;
+        p.fresh = true;
+    }
 }
 
 /// A simulation stepping on its own thread.
 pub struct Worker {
     commands: Sender<Command>,
-    shared: Arc<Shared>,
-    /// Commands sent so far: a snapshot taken before the worker applied them all is stale.
-    sent: AtomicU64,
+    mailbox: Arc<Mailbox<Cloth>>,
 }
 
 impl Worker {
@@ -110,12 +265,8 @@ impl Worker {
         notify: Box<dyn Fn() + Send>,
     ) -> std::io::Result<Self> {
         let (tx, rx) = mpsc::channel();
-        let shared = Arc::new(Shared {
-            published: Mutex::new(Published::default()),
-            wanted: AtomicBool::new(true),
-            stop: AtomicBool::new(false),
-        });
-        let inner = Arc::clone(&shared);
+        let mailbox = Mailbox::new(Cloth::default());
+        let inner = Arc::clone(&mailbox);
         std::thread::Builder::new()
             .name("clothsim-sim".to_owned())
             .spawn(move || {
@@ -124,17 +275,15 @@ impl Worker {
                     running,
                     rate,
                     commands: rx,
-                    shared: inner,
+                    mailbox: inner,
                     notify,
-                    spare: Vec::new(),
-                    published: (0, 0),
+                    publisher: Publisher::default(),
                 }
                 .run();
             })?;
         Ok(Self {
             commands: tx,
-            shared,
-            sent: AtomicU64::new(0),
+            mailbox,
         })
     }
 
@@ -143,51 +292,19 @@ impl Worker {
         // NOTE: a send fails only when the thread has ended (its simulation panicked); the
         // UI then sees no more snapshots and says so rather than stopping here.
         if self.commands.send(command).is_ok() {
-            self.sent.fetch_add(1, Ordering::AcqRel);
+            self.mailbox.count_sent();
         }
     }
 
     /// Whether the thread is still there to step.
     pub fn alive(&self) -> bool {
-        Arc::strong_count(&self.shared) > 1
+        Arc::strong_count(&self.mailbox) > 1
     }
 
     /// Moves the newest snapshot into `mirror` (the UI's copy, whose settings, scene and
     /// solver the UI owns) and asks for the next; `None` when nothing new arrived.
     pub fn adopt_into(&self, mirror: &mut Simulation) -> Option<Adopted> {
-        let mut p = self
-            .shared
-            .published
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner);
-        if !p.fresh {
-            return None;
-        }
-        p.fresh = false;
-        if p.applied < self.sent.load(Ordering::Acquire) {
-            // Taken before the worker saw the latest commands (a reset, a pause): showing it
-            // would undo them on screen for a moment. The next one follows at once.
-            drop(p);
-            self.shared.wanted.store(true, Ordering::Release);
-            return None;
-        }
-        std::mem::swap(&mut mirror.state.positions, &mut p.positions);
-        mirror.time = p.time;
-        mirror.steps = p.steps;
-        mirror.frames = p.frames;
-        mirror.history.clone_from(&p.history);
-        mirror.record.truncate(p.rows_from);
-        mirror.record.append(&mut p.new_rows);
-        mirror.peak_kinetic = p.peak_kinetic;
-        mirror.fault.clone_from(&p.fault);
-        let adopted = Adopted {
-            running: p.running,
-            errors: std::mem::take(&mut p.errors),
-            rates: p.rates,
-        };
-        drop(p);
-        self.shared.wanted.store(true, Ordering::Release);
-        Some(adopted)
+        self.mailbox.take(|cloth| cloth.adopt_into(mirror))
     }
 }
 
@@ -195,7 +312,7 @@ impl Drop for Worker {
     fn drop(&mut self) {
         // The thread ends after its current step; it is not joined, so quitting never waits
         // for a long step of a big cloth.
-        self.shared.stop.store(true, Ordering::Release);
+        self.mailbox.leave();
     }
 }
 
@@ -205,30 +322,50 @@ struct Stepper {
     running: bool,
     rate: f64,
     commands: Receiver<Command>,
-    shared: Arc<Shared>,
+    mailbox: Arc<Mailbox<Cloth>>,
     notify: Box<dyn Fn() + Send>,
-    /// The buffer the next snapshot's positions are copied into.
-    spare: Vec<cloth_solver::Vec3>,
-    /// The record's generation and length at the last snapshot.
-    published: (u64, usize),
+    publisher: Publisher,
 }
 
 /// Rates over a window of wall time.
-struct Meter {
-    start: Instant,
-    steps: u64,
-    sim_time: f64,
-    lagging: bool,
+pub struct Meter {
+    /// When the window began.
+    pub start: Instant,
+    /// Solver steps taken in it.
+    pub steps: u64,
+    /// Simulated seconds advanced in it.
+    pub sim_time: f64,
+    /// Whether owed time was dropped in it.
+    pub lagging: bool,
 }
 
 impl Meter {
-    fn new(now: Instant) -> Self {
+    /// A window beginning `now`.
+    pub fn new(now: Instant) -> Self {
         Self {
             start: now,
             steps: 0,
             sim_time: 0.0,
             lagging: false,
         }
+    }
+
+    /// The rates over the window once it has lasted [`WINDOW`] at `now` (`rate`: simulated
+    /// seconds per wall second asked for), starting the next window; `None` before.
+    pub fn rates(&mut self, now: Instant, rate: f64) -> Option<Rates> {
+        let span = now.duration_since(self.start);
+        if span < WINDOW {
+            return None;
+        }
+        let s = span.as_secs_f64();
+        let rates = Rates {
+            realtime_factor: self.sim_time / s / rate,
+            steps_per_sec: self.steps as f64 / s,
+            lagging: self.lagging,
+            measured: true,
+        };
+        *self = Self::new(now);
+        Some(rates)
     }
 }
 
@@ -243,7 +380,7 @@ impl Stepper {
         let mut force = true;
         let mut applied = 0_u64;
         loop {
-            if self.shared.stop.load(Ordering::Acquire) {
+            if self.mailbox.left() {
                 return;
             }
             let mut pending: Vec<Command> = held.take().into_iter().collect();
@@ -311,21 +448,12 @@ impl Stepper {
                         Err(RecvTimeoutError::Disconnected) => return,
                     }
                 }
-                let now = Instant::now();
-                let span = now.duration_since(meter.start);
-                if span >= WINDOW {
-                    let s = span.as_secs_f64();
-                    rates = Rates {
-                        realtime_factor: meter.sim_time / s / self.rate,
-                        steps_per_sec: meter.steps as f64 / s,
-                        lagging: meter.lagging,
-                        measured: true,
-                    };
-                    meter = Meter::new(now);
+                if let Some(r) = meter.rates(Instant::now(), self.rate) {
+                    rates = r;
                 }
             }
 
-            if force || self.running && self.shared.wanted.load(Ordering::Acquire) {
+            if force || self.running && self.mailbox.wanted() {
                 self.publish(&mut errors, rates, applied);
                 force = false;
             }
@@ -333,41 +461,12 @@ impl Stepper {
     }
 
     fn publish(&mut self, errors: &mut Vec<String>, rates: Rates, applied: u64) {
-        self.shared.wanted.store(false, Ordering::Release);
-        // NOTE: the copy is made before taking the lock, so the UI never waits on a big
-        // cloth's copy; the buffers then change hands.
-        self.spare.clone_from(&self.sim.state.positions);
-        {
-            let mut p = self
-                .shared
-                .published
-                .lock()
-                .unwrap_or_else(PoisonError::into_inner);
-            std::mem::swap(&mut p.positions, &mut self.spare);
-            p.time = self.sim.time;
-            p.steps = self.sim.steps;
-            p.frames = self.sim.frames;
-            p.history.clone_from(&self.sim.history);
-            // NOTE: only the rows since the last snapshot travel, so a long run's table is
-            // copied once, not at every draw; a reset starts the table again.
-            if self.sim.generation != self.published.0 {
-                self.published = (self.sim.generation, 0);
-                p.new_rows.clear();
-            }
-            if p.new_rows.is_empty() {
-                p.rows_from = self.published.1;
-            }
-            let from = self.published.1.min(self.sim.record.len());
-            p.new_rows.extend_from_slice(&self.sim.record[from..]);
-            self.published.1 = self.sim.record.len();
-            p.peak_kinetic = self.sim.peak_kinetic;
-            p.fault.clone_from(&self.sim.fault);
-            p.running = self.running;
-            p.rates = rates;
-            p.errors.append(errors);
-            p.applied = applied;
-            p.fresh = true;
-        }
+        self.publisher.copy(&self.sim);
+        let (publisher, sim) = (&mut self.publisher, &self.sim);
+        self.mailbox
+            .put(self.running, rates, errors, applied, |cloth| {
+                publisher.fill(sim, cloth);
+            });
         (self.notify)();
     }
 }

@@ -36,12 +36,9 @@ pub fn panes(app: &App, f: &mut Frame, rects: &[Rect], theme: &Theme) {
             format!(" {title} "),
             if stopped { theme.dim } else { theme.focus },
         )];
-        // NOTE: each variant steps on its own worker, so one that costs more (another
-        // solver, a stiffer cloth on more steps) can be behind: its time says so.
-        spans.push(Span::styled(
-            format!("{} t {:.2} s ", view.name(), sim.time),
-            theme.dim,
-        ));
+        // NOTE: the variants step in lockstep, so the group's time (the status line's) is
+        // every pane's; a stopped one gives the time it stopped at.
+        spans.push(Span::styled(format!("{} ", view.name()), theme.dim));
         if let Some(fault) = &sim.fault {
             spans.push(Span::styled(
                 format!("stopped at {:.2} s: {} ", fault.time, fault.what),

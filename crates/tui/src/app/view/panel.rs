@@ -46,7 +46,17 @@ pub fn params(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
                 .map(|(_, v)| v.replace(' ', ""))
         });
         let (value, unit, edited) = if let Some(values) = varied {
-            let values: String = values.chars().take(value_w).collect();
+            // NOTE: cut values end in an ellipsis, so `1,5000,20000,1` is never read as a
+            // last value of 1 (the table's title gives them all).
+            let values: String = if values.chars().count() > value_w {
+                values
+                    .chars()
+                    .take(value_w.saturating_sub(1))
+                    .chain(['…'])
+                    .collect()
+            } else {
+                values
+            };
             (
                 values,
                 if p.kind == Kind::Solver { "" } else { p.unit },

@@ -9,10 +9,22 @@ use crate::app::keymap::KEYMAP;
 use crate::app::model::{App, Level};
 use crate::app::theme::Theme;
 
-/// `clothsim  pinned4  verlet  RUNNING 1x  t 1.234 s  rtf 1.00  2700 steps/s  30 fps`
+/// `clothsim  pinned4  verlet  RUNNING 1x  t 1.234 s  rtf 1.00  2700 steps/s  30 fps`; in
+/// compare mode the time and the rates are the group's (`3 variants rtf 1.00`).
 pub fn title(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     let sim = &app.sim;
-    let (state, style) = if sim.fault.is_some() {
+    let (stopped, time) = match &app.compare {
+        Some(c) => {
+            let all = sim.fault.is_some() && c.members.iter().all(|m| m.sim.fault.is_some());
+            (all, c.clock(sim).1)
+        }
+        None => (sim.fault.is_some(), sim.time),
+    };
+    let group = app
+        .compare
+        .as_ref()
+        .map_or_else(String::new, |c| format!("{} variants ", c.len()));
+    let (state, style) = if stopped {
         ("STOPPED", theme.error)
     } else if app.running {
         ("RUNNING", theme.running)
@@ -39,10 +51,7 @@ pub fn title(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
         ),
         (10, Span::styled(format!(" {state}"), style)),
         (10, Span::styled(format!(" {rate} "), theme.text)),
-        (
-            9,
-            Span::styled(format!(" t {:.3} s ", sim.time), theme.text),
-        ),
+        (9, Span::styled(format!(" t {time:.3} s "), theme.text)),
     ];
     if let Some(r) = &app.recording {
         let name = r
@@ -59,14 +68,14 @@ pub fn title(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
             fields.push((
                 9,
                 Span::styled(
-                    format!(" slower than real time: {:.2}x ", r.realtime_factor),
+                    format!(" {group}slower than real time: {:.2}x ", r.realtime_factor),
                     theme.warn,
                 ),
             ));
         } else {
             fields.push((
                 7,
-                Span::styled(format!(" rtf {:.2} ", r.realtime_factor), theme.text),
+                Span::styled(format!(" {group}rtf {:.2} ", r.realtime_factor), theme.text),
             ));
         }
         fields.push((
