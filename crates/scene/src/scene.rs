@@ -7,6 +7,8 @@ use cloth_mesh::{
 };
 use serde_json::{Map, Value};
 
+use std::sync::Arc;
+
 use crate::number::show;
 use crate::{SceneError, SceneFile, SimulationBlock, apply_set, bundled, read_scene_file};
 
@@ -17,8 +19,9 @@ pub struct Scene {
     pub origin: String,
     /// The file as parsed (after `--set` overrides), kept so the scene can be saved back.
     pub file: SceneFile,
-    /// The cloth's topology and start positions.
-    pub mesh: ClothMesh,
+    /// The cloth's topology and start positions, shared: scenes built from one grid (the
+    /// variants of a study that vary no grid key) can hold one mesh.
+    pub mesh: Arc<ClothMesh>,
     /// Live parameters at load time.
     pub params: StepParams,
     /// Collision objects: the sphere, then the plane, when present.
@@ -561,7 +564,7 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
     Ok(Scene {
         origin: origin.to_owned(),
         file,
-        mesh,
+        mesh: Arc::new(mesh),
         params,
         colliders,
         solver,

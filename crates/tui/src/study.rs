@@ -203,7 +203,7 @@ pub fn variants(
             })
             .collect();
     }
-    combos
+    let mut variants: Vec<Variant> = combos
         .into_iter()
         .map(|combo| {
             let mut all = sets.to_vec();
@@ -224,7 +224,24 @@ pub fn variants(
                 choice,
             })
         })
-        .collect()
+        .collect::<anyhow::Result<_>>()?;
+    share_meshes(&mut variants);
+    Ok(variants)
+}
+
+/// Makes variants whose grids are the same (every variant of a study that varies no `cloth`
+/// grid key) hold one mesh, so a study costs one topology whatever its number of variants.
+fn share_meshes(variants: &mut [Variant]) {
+    for i in 1..variants.len() {
+        let (before, rest) = variants.split_at_mut(i);
+        let v = &mut rest[0];
+        if let Some(same) = before
+            .iter()
+            .find(|b| b.scene.mesh.spec() == v.scene.mesh.spec())
+        {
+            v.scene.mesh = std::sync::Arc::clone(&same.scene.mesh);
+        }
+    }
 }
 
 /// The numbers a study compares, for one variant at one frame.
@@ -496,6 +513,22 @@ mod tests {
         }
         let e = "cloth.ks=1".parse::<Axis>().unwrap_err();
         assert!(e.contains("2 to 6 values"), "{e}");
+    }
+
+    #[test]
+    fn variants_of_one_grid_hold_one_mesh_and_other_grids_their_own() {
+        let registry = solvers::default_registry();
+        let axes: Vec<Axis> = ["cloth.ks=1,5000", "cloth.width=1,2"]
+            .iter()
+            .map(|a| a.parse().unwrap())
+            .collect();
+        let vs = variants(&registry, "pinned2", &[], None, &axes).unwrap();
+        // The first axis varies fastest: [ks=1 w=1, ks=5000 w=1, ks=1 w=2, ks=5000 w=2].
+        let same =
+            |a: usize, b: usize| std::sync::Arc::ptr_eq(&vs[a].scene.mesh, &vs[b].scene.mesh);
+        assert!(same(0, 1) && same(2, 3), "a stiffness changes no grid");
+        assert!(!same(0, 2), "a width is another grid");
+        assert_ne!(vs[0].scene.mesh.spec(), vs[2].scene.mesh.spec());
     }
 
     #[test]

@@ -110,7 +110,7 @@ pub fn prepare(app: &mut App, area: Rect) {
     let sim = &app.sim;
     let (mesh, state) = match &app.display {
         Some(d) => (&d.mesh, &d.state),
-        None => (&sim.scene.mesh, &sim.state),
+        None => (&*sim.scene.mesh, &sim.state),
     };
     // NOTE: a non-finite state never reaches here (the simulation puts back its last good
     // frame); should one, the old extent stays.
@@ -191,7 +191,7 @@ fn prepare_compare(app: &mut App, rects: &[Rect]) {
             *slot = None;
             continue;
         };
-        let full = &sim.scene.mesh;
+        let full: &ClothMesh = &sim.scene.mesh;
         if display.as_ref().is_none_or(|d| !d.draws(full)) {
             *display = Display::for_mesh(full);
         }
