@@ -234,17 +234,29 @@ pub fn build_compare_in(
     let Some(first) = variants.next() else {
         anyhow::bail!("--vary gives no variants");
     };
+    // Every variant starts from `--from`'s state (read against its own grid, so a width
+    // variant whose grid differs is refused with the file's name) at the file's clock.
+    let start = |sim: &mut Simulation| -> anyhow::Result<()> {
+        if let Some(path) = &args.ui.from {
+            let (file, state) =
+                crate::state_file::StateFile::read(path, &sim.scene.mesh, sim.dt())?;
+            sim.start_from(state, file.frames, file.time);
+        }
+        Ok(())
+    };
     app.sim = Simulation::new(
         first.scene,
         registry.clone(),
         Some(first.choice.entry.name()),
     )?;
+    start(&mut app.sim)?;
     app.saved = (app.sim.settings.clone(), app.sim.entry().name());
     app.sent = app.saved.clone();
     let solver_varied = args.vary.iter().any(|a| a.key == "simulation.solver");
     let mut members = Vec::new();
     for v in variants {
-        let sim = Simulation::new(v.scene, registry.clone(), Some(v.choice.entry.name()))?;
+        let mut sim = Simulation::new(v.scene, registry.clone(), Some(v.choice.entry.name()))?;
+        start(&mut sim)?;
         members.push(compare::Member {
             title: v.title,
             sent: sim.settings.clone(),

@@ -1135,6 +1135,56 @@ fn compared(app: &App) -> Vec<&super::sim::Simulation> {
 }
 
 #[test]
+fn every_compared_variant_starts_from_the_state_file_and_a_grid_it_does_not_fit_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut source = app_with("pinned4", true);
+    for _ in 0..3 {
+        press(&mut source, KeyCode::Char('n'));
+    }
+    let path = dir.path().join("state.json");
+    let file = crate::state_file::StateFile::new(
+        &source.sim.scene.mesh,
+        &source.sim.state,
+        source.sim.frames,
+        source.sim.time,
+        source.sim.dt(),
+    );
+    std::fs::write(&path, serde_json::to_string(&file).unwrap()).unwrap();
+    let args = |vary: &str| super::CompareArgs {
+        ui: Args {
+            scene: "pinned4".to_owned(),
+            paused: true,
+            from: Some(path.clone()),
+            ..Args::default()
+        },
+        vary: vec![vary.parse().unwrap()],
+    };
+    let app = super::build_compare_in(
+        &args("cloth.ks=1000,5000"),
+        &crate::default_registry(),
+        false,
+        &cloth_render::ColorEnv::default(),
+    )
+    .unwrap();
+    let sims = compared(&app);
+    assert_eq!(sims.len(), 2);
+    for sim in sims {
+        assert_eq!(sim.state, source.sim.state, "positions and velocity");
+        assert_eq!((sim.frames, sim.time), (3, source.sim.time));
+    }
+    // A variant on another grid cannot take the file's points: refused, naming the file.
+    let Err(e) = super::build_compare_in(
+        &args("cloth.num_height_points=50,60"),
+        &crate::default_registry(),
+        false,
+        &cloth_render::ColorEnv::default(),
+    ) else {
+        panic!("a state on another grid was taken");
+    };
+    assert!(format!("{e:#}").contains("state.json"), "{e:#}");
+}
+
+#[test]
 fn snapshot_compare_three_stiffnesses() {
     let mut app = compare_with("pinned4", &["cloth.ks=1,5000,100000"]);
     update(&mut app, Message::Tick(Duration::from_secs_f64(0.3)));
