@@ -131,15 +131,11 @@ impl SpatialHash {
     }
 
     /// The points in point `i`'s box (including `i`), in index order, as of the last rebuild.
-    pub fn box_of(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
-        self.members[self.cell_range(i)].iter().map(|&j| j as usize)
-    }
-
-    /// Point `i`'s box as a range of `members` (and of `sorted`).
-    #[inline]
-    fn cell_range(&self, i: usize) -> std::ops::Range<usize> {
+    #[cfg(test)]
+    fn box_of(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
         let c = self.cell_of[i] as usize;
-        self.start[c] as usize..self.start[c + 1] as usize
+        let range = self.start[c] as usize..self.start[c + 1] as usize;
+        self.members[range].iter().map(|&j| j as usize)
     }
 
     /// Pushes every unpinned point away from the other points of its box that are closer than
