@@ -54,8 +54,7 @@ use crate::simd::Simd;
 /// the cloth keeps being skipped): such a box is still clear, so skipping it changes nothing
 /// (see `Repulsion::allowance`). On a settling cloth
 /// that is nearly every box; a box whose anchors keep being outrun waits longer and longer
-/// before it takes new ones, so a moving cloth does not pay for them. When no point changed
-/// box, the layout of the last rebuild is kept as it is.
+/// before it takes new ones, so a moving cloth does not pay for them.
 ///
 /// Every pass is linear in the number of points or cells (at most about twice the boxes in use:
 /// the table is cleared when the cloth has left more boxes behind), but for the relayout's sort
