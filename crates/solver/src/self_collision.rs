@@ -22,8 +22,6 @@ use layout::Run;
 use memory::Memory;
 use table::Table;
 
-use crate::simd::Simd;
-
 /// A spatial hash of the cloth's points in boxes of `3 * width / nw` by `3 * height / nh` by the
 /// larger of the two, exactly the course's boxes, so the same pairs of points interact.
 ///
@@ -62,8 +60,6 @@ use crate::simd::Simd;
 /// is allocated.
 #[derive(Debug, Default, Clone)]
 pub struct SpatialHash {
-    /// The vector instructions the passes may use, detected when the hash is built.
-    simd: Simd,
     /// Box key of each point, this rebuild's.
     key_of: Vec<u64>,
     /// Box key of each point at the last rebuild.
@@ -149,7 +145,7 @@ impl SpatialHash {
 
 #[cfg(test)]
 mod tests {
-    use super::keys::{box_bits, compute_keys, keys_portable};
+    use super::keys::box_bits;
     use super::*;
     use crate::testing::assert_same_bits;
     use cloth_mesh::GridSpec;
@@ -494,21 +490,5 @@ mod tests {
             let v = f64::from(k) / 64.0 + 1e-3;
             assert_eq!(box_bits(v), expected(v), "{v}");
         }
-    }
-
-    #[test]
-    fn the_avx2_key_pass_gives_the_portable_keys() {
-        let positions = scattered(1001, 9, -3.0, 3.0);
-        let size = (0.06, 0.05, 0.06);
-        let mut portable = vec![0; positions.len()];
-        keys_portable(&mut portable, &positions, size);
-        let mut dispatched = vec![1; positions.len()];
-        compute_keys(
-            crate::simd::Simd::detect(),
-            &mut dispatched,
-            &positions,
-            size,
-        );
-        assert_eq!(portable, dispatched);
     }
 }

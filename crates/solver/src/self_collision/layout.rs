@@ -10,7 +10,6 @@ use super::memory::Memory;
 use super::table::{SLOT_BYTES, Table, table_size};
 use super::{PARALLEL_CHUNK, SpatialHash};
 use crate::disjoint::Disjoint;
-use crate::simd::Simd;
 
 /// What a run of points keeps between the passes of a rebuild.
 #[derive(Debug, Default, Clone)]
@@ -52,7 +51,6 @@ struct CellPass<'a> {
     nw: usize,
     /// Whether the points' cells from the last rebuild are valid.
     coherent: bool,
-    simd: Simd,
 }
 
 impl CellPass<'_> {
@@ -68,12 +66,7 @@ impl CellPass<'_> {
         cell_of: &mut [u32],
         run: &mut Run,
     ) {
-        compute_keys(
-            self.simd,
-            keys,
-            &self.positions[first..first + keys.len()],
-            self.size,
-        );
+        compute_keys(keys, &self.positions[first..first + keys.len()], self.size);
         run.misses.clear();
         run.changed.clear();
         let nw = self.nw;
@@ -222,7 +215,6 @@ impl SpatialHash {
             size: Self::box_size(mesh),
             nw: mesh.nw(),
             coherent: self.coherent,
-            simd: self.simd,
         };
         let each = |(r, (((keys, last), cells), run)): (usize, RunWindows<'_>)| {
             pass.run(r * chunk, keys, last, cells, run);
