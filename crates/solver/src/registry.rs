@@ -293,28 +293,10 @@ impl SolverEntry {
         }
     }
 
-    /// Whether the entry states its own memory estimate (else
-    /// [`SolverEntry::memory_estimate`] is [`default_memory_estimate`]).
-    #[must_use]
-    pub const fn states_its_memory(&self) -> bool {
-        self.memory.is_some()
-    }
-
     /// The option called `key`, if the solver has one.
     #[must_use]
     pub fn option(&self, key: &str) -> Option<&'static SolverOption> {
         self.options.iter().find(|o| o.name == key)
-    }
-
-    /// Every option at its default, as a JSON object.
-    #[must_use]
-    pub fn default_options(&self) -> Value {
-        Value::Object(
-            self.options
-                .iter()
-                .map(|o| (o.name.to_owned(), o.default_value()))
-                .collect(),
-        )
     }
 
     /// Checks `options`: a JSON object (or `null`, meaning none) whose keys are this solver's
@@ -635,9 +617,16 @@ mod tests {
             assert_eq!(ENTRY.number(&none, "tolerance"), Ok(1e-6));
             assert_eq!(ENTRY.choice(&none, "order"), Ok("faithful"));
         }
+        let defaults: Vec<(&str, Value)> = (ENTRY.options().iter())
+            .map(|o| (o.name, o.default_value()))
+            .collect();
         assert_eq!(
-            ENTRY.default_options(),
-            json!({"iterations": 10, "tolerance": 1e-6, "order": "faithful"})
+            defaults,
+            [
+                ("iterations", json!(10)),
+                ("tolerance", json!(1e-6)),
+                ("order", json!("faithful"))
+            ]
         );
         // Zero steps per frame would be no time step at all: the entry keeps at least one.
         assert_eq!(ENTRY.steps_per_frame(), 1);
@@ -739,13 +728,11 @@ mod tests {
             bytes * mesh.len() as u64
         }
         let mesh = mesh();
-        assert!(!ENTRY.states_its_memory());
         assert_eq!(
             ENTRY.memory_estimate(&mesh, &Value::Null),
             default_memory_estimate(&mesh)
         );
         let stated = SolverEntry::new("stated", "states it", plain).with_memory_estimate(per_point);
-        assert!(stated.states_its_memory());
         assert_eq!(
             stated.memory_estimate(&mesh, &json!({"bytes_per_point": 100})),
             100 * 2500

@@ -22,8 +22,6 @@ use layout::Run;
 use memory::Memory;
 use table::Table;
 
-use crate::simd::Simd;
-
 /// A spatial hash of the cloth's points in boxes of `3 * width / nw` by `3 * height / nh` by the
 /// larger of the two, exactly the course's boxes, so the same pairs of points interact.
 ///
@@ -54,8 +52,7 @@ use crate::simd::Simd;
 /// the cloth keeps being skipped): such a box is still clear, so skipping it changes nothing
 /// (see `Repulsion::allowance`). On a settling cloth
 /// that is nearly every box; a box whose anchors keep being outrun waits longer and longer
-/// before it takes new ones, so a moving cloth does not pay for them. When no point changed
-/// box, the layout of the last rebuild is kept as it is.
+/// before it takes new ones, so a moving cloth does not pay for them.
 ///
 /// Every pass is linear in the number of points or cells (at most about twice the boxes in use:
 /// the table is cleared when the cloth has left more boxes behind), but for the relayout's sort
@@ -63,8 +60,6 @@ use crate::simd::Simd;
 /// is allocated.
 #[derive(Debug, Default, Clone)]
 pub struct SpatialHash {
-    /// The vector instructions the passes may use, detected when the hash is built.
-    simd: Simd,
     /// Box key of each point, this rebuild's.
     key_of: Vec<u64>,
     /// Box key of each point at the last rebuild.
@@ -131,15 +126,11 @@ impl SpatialHash {
     }
 
     /// The points in point `i`'s box (including `i`), in index order, as of the last rebuild.
-    pub fn box_of(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
-        self.members[self.cell_range(i)].iter().map(|&j| j as usize)
-    }
-
-    /// Point `i`'s box as a range of `members` (and of `sorted`).
-    #[inline]
-    fn cell_range(&self, i: usize) -> std::ops::Range<usize> {
+    #[cfg(test)]
+    fn box_of(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
         let c = self.cell_of[i] as usize;
-        self.start[c] as usize..self.start[c + 1] as usize
+        let range = self.start[c] as usize..self.start[c + 1] as usize;
+        self.members[range].iter().map(|&j| j as usize)
     }
 
     /// Pushes every unpinned point away from the other points of its box that are closer than
@@ -154,7 +145,7 @@ impl SpatialHash {
 
 #[cfg(test)]
 mod tests {
-    use super::keys::{box_bits, compute_keys, keys_portable};
+    use super::keys::box_bits;
     use super::*;
     use crate::testing::assert_same_bits;
     use cloth_mesh::GridSpec;
@@ -499,21 +490,5 @@ mod tests {
             let v = f64::from(k) / 64.0 + 1e-3;
             assert_eq!(box_bits(v), expected(v), "{v}");
         }
-    }
-
-    #[test]
-    fn the_avx2_key_pass_gives_the_portable_keys() {
-        let positions = scattered(1001, 9, -3.0, 3.0);
-        let size = (0.06, 0.05, 0.06);
-        let mut portable = vec![0; positions.len()];
-        keys_portable(&mut portable, &positions, size);
-        let mut dispatched = vec![1; positions.len()];
-        compute_keys(
-            crate::simd::Simd::detect(),
-            &mut dispatched,
-            &positions,
-            size,
-        );
-        assert_eq!(portable, dispatched);
     }
 }

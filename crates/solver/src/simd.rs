@@ -1,6 +1,6 @@
 //! The one place the solver learns which vector instructions the CPU runs.
 //!
-//! A [`Simd`] is detected once, when a solver (or a [`crate::SpatialHash`]) is built, and handed
+//! A [`Simd`] is detected once, when a solver is built, and handed
 //! to every fast path. The AVX2 builds of the passes take its [`Avx2`] proof as an argument:
 //! holding one is the invariant their `unsafe` calls rest on, and nothing else in the crate asks
 //! the CPU.

@@ -1,6 +1,6 @@
 //! The layout: the points grouped box by box (`start`, `members`), each box listing its points
-//! in index order whatever the thread count, kept from one rebuild to the next when no point
-//! changed box, moved in place when a few did, laid out afresh by a counting sort otherwise.
+//! in index order whatever the thread count, moved in place from one rebuild to the next when
+//! few points changed box, laid out afresh by a counting sort otherwise.
 
 use cloth_mesh::{ClothMesh, Vec3};
 use rayon::prelude::*;
@@ -10,7 +10,6 @@ use super::memory::Memory;
 use super::table::{SLOT_BYTES, Table, table_size};
 use super::{PARALLEL_CHUNK, SpatialHash};
 use crate::disjoint::Disjoint;
-use crate::simd::Simd;
 
 /// What a run of points keeps between the passes of a rebuild.
 #[derive(Debug, Default, Clone)]
@@ -52,7 +51,6 @@ struct CellPass<'a> {
     nw: usize,
     /// Whether the points' cells from the last rebuild are valid.
     coherent: bool,
-    simd: Simd,
 }
 
 impl CellPass<'_> {
@@ -68,12 +66,7 @@ impl CellPass<'_> {
         cell_of: &mut [u32],
         run: &mut Run,
     ) {
-        compute_keys(
-            self.simd,
-            keys,
-            &self.positions[first..first + keys.len()],
-            self.size,
-        );
+        compute_keys(keys, &self.positions[first..first + keys.len()], self.size);
         run.misses.clear();
         run.changed.clear();
         let nw = self.nw;
@@ -222,7 +215,6 @@ impl SpatialHash {
             size: Self::box_size(mesh),
             nw: mesh.nw(),
             coherent: self.coherent,
-            simd: self.simd,
         };
         let each = |(r, (((keys, last), cells), run)): (usize, RunWindows<'_>)| {
             pass.run(r * chunk, keys, last, cells, run);
@@ -270,16 +262,10 @@ impl SpatialHash {
             }
             moved += run.changed.len();
         }
-        if was_coherent && moved == 0 {
-            // NOTE: every point kept its box, so every box keeps its points, in the same
-            // order: the layout (`start`, `members`) is the last one. A settled cloth gets here
-            // most steps.
-            return;
-        }
         if was_coherent && moved <= n / RELAYOUT_SHARE {
-            // NOTE: a moving cloth gets here most steps: a step takes a point a small fraction
-            // of a box, and about one point in two hundred changes box on the falling 256 x 256
-            // cloth.
+            // NOTE: nearly every step gets here: a step takes a point a small fraction of a
+            // box, and about one point in two hundred changes box on the falling 256 x 256
+            // cloth (none on a settled one).
             self.relayout(chunk);
             return;
         }
