@@ -1,14 +1,15 @@
 //! The implicit solvers' frame times as ratios to Verlet's, timed in turn in one run.
 //!
-//! `cargo run -p cloth-implicit --release --example ratios -- [GRID] [FRAMES]` (defaults 50 and
-//! 450): the course's `pinned4` scaled to GRID x GRID points (thickness scaled with the spacing),
+//! `cargo run -p cloth-implicit --release --example ratios -- [GRID] [FRAMES] [--only SOLVER]
+//! [--group default|stiff]` (defaults 50 and 450, every solver and both groups): the course's `pinned4` scaled to GRID x GRID points (thickness scaled with the spacing),
 //! self-collision on, from the flat start. Each configuration advances its own cloth; every
 //! round times one frame of each, so a machine whose speed drifts slows all of them alike. The
 //! mean over all frames (the fall, the swing and the rest) is what a user waits for.
 //!
 //! Configurations: Verlet at 30 steps per frame (the reference), fast-implicit and implicit at
 //! one step per frame; then at ks = 1e6, Verlet at 200 steps per frame (the fewest that keep
-//! it stable there on the 50 x 50 cloth) against fast-implicit and implicit at one.
+//! it stable there on the 50 x 50 cloth) against fast-implicit and implicit at one. `--only`
+//! (repeatable) keeps the named implicit solvers' rows and Verlet's; `--group` keeps one group.
 
 use std::time::Instant;
 
@@ -36,7 +37,13 @@ struct Config {
     failed: Option<String>,
 }
 
-fn group(mesh: &ClothMesh, frames: usize, ks: f64, verlet_steps: u32) -> Vec<Config> {
+fn group(
+    mesh: &ClothMesh,
+    frames: usize,
+    ks: f64,
+    verlet_steps: u32,
+    only: &[String],
+) -> Vec<Config> {
     let base = StepParams {
         ks,
         ..StepParams::default()
@@ -52,6 +59,11 @@ fn group(mesh: &ClothMesh, frames: usize, ks: f64, verlet_steps: u32) -> Vec<Con
     ];
     let mut runs: Vec<Config> = configs
         .into_iter()
+        .enumerate()
+        .filter(|(i, (name, _, _))| {
+            *i == 0 || only.is_empty() || only.iter().any(|o| name.trim_end_matches("-1") == o)
+        })
+        .map(|(_, c)| c)
         .map(|(name, solver, steps)| Config {
             name,
             solver,
@@ -81,12 +93,31 @@ fn group(mesh: &ClothMesh, frames: usize, ks: f64, verlet_steps: u32) -> Vec<Con
 }
 
 fn main() {
+    let mut positional = Vec::new();
+    let mut only = Vec::new();
+    let mut groups = Vec::new();
     let mut args = std::env::args().skip(1);
-    let n: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(50);
-    let frames: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(450);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--only" => only.extend(args.next()),
+            "--group" => groups.extend(args.next()),
+            _ => positional.push(a),
+        }
+    }
+    let n: usize = positional
+        .first()
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(50);
+    let frames: usize = positional
+        .get(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(450);
     let mesh = pinned4(n);
-    for (ks, verlet_steps) in [(5000.0, 30), (1e6, 200)] {
-        let runs = group(&mesh, frames, ks, verlet_steps);
+    for (group_name, ks, verlet_steps) in [("default", 5000.0, 30), ("stiff", 1e6, 200)] {
+        if !groups.is_empty() && !groups.iter().any(|g| g == group_name) {
+            continue;
+        }
+        let runs = group(&mesh, frames, ks, verlet_steps, &only);
         let reference = runs[0].seconds;
         println!("{n} x {n}, ks = {ks}, self-collision on, {frames} frames from the flat start:");
         for c in &runs {

@@ -18,7 +18,7 @@ impl ImplicitEuler {
     .with_memory_estimate(implicit_memory)
     .with_options(&[SolverOption {
         name: "tolerance",
-        description: "Newton stops once an iteration moves no point farther than this, metres",
+        description: "Newton stops once an iteration moves no point farther than this, metres per frame",
         kind: OptionKind::Number {
             min: 1e-12,
             max: 1e-2,

@@ -23,12 +23,15 @@
 //! [`limiter_stiffness`](crate::limiter_stiffness) for `k_lim`). The system
 //! `H dx = -grad Phi` is solved inexactly: by a conjugate gradient preconditioned by the last
 //! Cholesky factor (faer's sparse `L L^T`), kept across iterations and steps while it still
-//! brings the residual below a tenth of the gradient within [`MAX_PCG_ITERATIONS`] iterations,
-//! and refactored at the current `H` otherwise. The fill-reducing ordering and symbolic factor
+//! brings the residual below a tenth of the gradient within [`MAX_PCG_ITERATIONS`] iterations
+//! and the solves with it have not together spent [`REFACTOR_BUDGET`] iterations beyond the
+//! first of each, and refactored at the current `H` otherwise. The fill-reducing ordering and symbolic factor
 //! are computed once per topology (points, springs, pins). A backtracking (Armijo) line search
 //! on `Phi` makes every iteration a descent step (a preconditioned conjugate gradient started at
-//! zero always returns a descent direction of a positive-definite `H`). Pinned points are not
-//! unknowns: their springs add to their neighbours' diagonal blocks and gradients only.
+//! zero always returns a descent direction of a positive-definite `H`). Newton stops once a
+//! step moves no point farther than the tolerance over the steps per frame
+//! ([`NEWTON_TOLERANCE`]). Pinned points are not unknowns: their springs add to their
+//! neighbours' diagonal blocks and gradients only.
 //!
 //! # The stretch limit
 //!
@@ -42,7 +45,9 @@
 //! potential: the step pulls the springs back, it cannot overshoot.
 //!
 //! After the solve, self-collision and the collision objects are applied as in
-//! [`cloth_solver::Verlet`], and `last` is set to the start-of-step positions, so that
+//! [`cloth_solver::Verlet`], with each object's friction retimed to the step as fast-implicit
+//! does (the course's per-step friction applied as the share that its thirty steps a frame
+//! remove, see [`FastImplicit`](crate::FastImplicit)), and `last` is set to the start-of-step positions, so that
 //! `(positions - last) / h` is the new velocity.
 //!
 //! # Velocity and solver swaps
@@ -74,14 +79,18 @@ use cloth_solver::{Collider, SolveError, Solver, SpatialHash, StepParams, StepRe
 use crate::cholesky::Cholesky;
 use crate::commit::{commit, hold_still, inertial_prediction};
 use crate::memory::{Allocation, check_available, try_filled};
+use crate::retime::retime_friction;
 use crate::spring_energy::{SpringLaw, limiter_stiffness};
 use crate::topology::{NONE, Topology};
 
-/// By default Newton stops once its step moves no point farther than this, metres (1 um: a
-/// twentieth of the 0.1 % stretch of a 2 cm spring, far below a terminal cell, and a velocity
-/// error under 1e-4 m/s at one step per frame). Each iteration costs a numeric factorisation, so
-/// a tighter default would mostly buy invisible digits; see [`ImplicitEuler::with_tolerance`].
-pub const NEWTON_TOLERANCE: f64 = 1e-6;
+/// By default Newton stops once its step moves no point farther than this per frame, metres:
+/// at `steps_per_frame` steps a frame, once a step moves no point farther than this over
+/// `steps_per_frame` (a velocity error under `NEWTON_TOLERANCE * frames_per_sec`, 0.9 mm/s at
+/// 90 frames per second, whatever the step). 10 um is half a thousandth of a 2 cm spring, far
+/// below a terminal cell, and a tenth of the 1 cm/s at which a cloth counts as moving; each
+/// iteration costs a linear solve, so a tighter default would mostly buy invisible digits. See
+/// [`ImplicitEuler::with_tolerance`].
+pub const NEWTON_TOLERANCE: f64 = 1e-5;
 
 /// At most this many Newton iterations per step; a step that has not converged by then keeps its
 /// last (energy-decreasing) iterate and reports its residual.
@@ -97,6 +106,13 @@ const MAX_HALVINGS: u32 = 40;
 /// before the matrix is refactored: a preconditioner that needs more describes a matrix too far
 /// from the current one, and a fresh factor is then cheaper than more iterations.
 pub const MAX_PCG_ITERATIONS: u32 = 6;
+
+/// The kept factor is replaced once the solves with it have together needed this many
+/// conjugate-gradient iterations beyond the first of each: about what one numeric
+/// factorisation costs on the course's grid (each iteration is two triangular solves with the
+/// factor and a product with the matrix), so a factor that has become a poor preconditioner is
+/// not paid for again and again.
+pub const REFACTOR_BUDGET: u32 = 16;
 
 /// The inexact Newton step is accepted once the linear residual is below this fraction of the
 /// gradient (a constant forcing term: Newton then converges linearly at about this rate, fast
@@ -124,6 +140,8 @@ pub struct ImplicitEuler {
     y: Vec<Vec3>,
     x: Vec<Vec3>,
     trial: Vec<Vec3>,
+    /// The colliders with their friction retimed to the step.
+    colliders: Vec<Collider>,
     hash: SpatialHash,
 }
 
@@ -138,6 +156,9 @@ struct System {
     /// Whether the factor holds a matrix of the current parameters' kind: any factor of a
     /// positive-definite matrix is a valid preconditioner, this only says one exists.
     factored: bool,
+    /// Conjugate-gradient iterations beyond the first of each solve since the last
+    /// factorisation (see [`REFACTOR_BUDGET`]).
+    extra: u32,
 }
 
 /// Everything one Newton step needs besides positions.
@@ -160,7 +181,8 @@ impl ImplicitEuler {
     }
 
     /// A new solver whose Newton iterations stop once a step moves no point farther than
-    /// `tolerance` metres (non-finite or negative values mean the default).
+    /// `tolerance` metres over the steps per frame (`tolerance` itself at one step per frame;
+    /// non-finite or negative values mean the default).
     #[must_use]
     pub fn with_tolerance(tolerance: f64) -> Self {
         let tolerance = if tolerance.is_finite() && tolerance >= 0.0 {
@@ -178,6 +200,7 @@ impl ImplicitEuler {
             y: Vec::new(),
             x: Vec::new(),
             trial: Vec::new(),
+            colliders: Vec::new(),
             hash: SpatialHash::default(),
         }
     }
@@ -246,6 +269,7 @@ impl ImplicitEuler {
             col_ptr,
             row_idx,
             factored: false,
+            extra: 0,
         });
         Ok(())
     }
@@ -410,7 +434,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 /// Solves `A dx = -grad` by the conjugate gradient preconditioned by `factor` (the Cholesky
 /// factor of an earlier `A`), writing `dx`; true when the residual fell below
-/// [`FORCING`]` |grad|` within `max_iterations`.
+/// [`FORCING`]` |grad|` within `max_iterations`: the iterations it took, or `None`.
 ///
 /// # Errors
 /// A solve with the factor failed.
@@ -421,7 +445,7 @@ fn pcg(
     dx: &mut [f64],
     [r, z, p, ap]: &mut [Vec<f64>; 4],
     max_iterations: u32,
-) -> Result<bool, SolveError> {
+) -> Result<Option<u32>, SolveError> {
     let target = FORCING * dot(grad, grad).sqrt();
     dx.fill(0.0);
     for (r, g) in r.iter_mut().zip(grad) {
@@ -431,11 +455,11 @@ fn pcg(
     factor.solve_in_place(z).map_err(method_error)?;
     p.copy_from_slice(z);
     let mut rz = dot(r, z);
-    for _ in 0..max_iterations {
+    for done in 1..=max_iterations {
         a.mul(p, ap);
         let pap = dot(p, ap);
         if !(pap > 0.0 && rz.is_finite()) {
-            return Ok(false);
+            return Ok(None);
         }
         let alpha = rz / pap;
         for ((x, r), (p, ap)) in dx.iter_mut().zip(r.iter_mut()).zip(p.iter().zip(ap.iter())) {
@@ -443,7 +467,7 @@ fn pcg(
             *r -= alpha * ap;
         }
         if dot(r, r).sqrt() <= target {
-            return Ok(true);
+            return Ok(Some(done));
         }
         z.copy_from_slice(r);
         factor.solve_in_place(z).map_err(method_error)?;
@@ -454,7 +478,7 @@ fn pcg(
             *p = z + beta * *p;
         }
     }
-    Ok(false)
+    Ok(None)
 }
 
 fn add3(v: &mut [f64], f: usize, g: &Vec3) {
@@ -513,6 +537,7 @@ impl Solver for ImplicitEuler {
             col_ptr,
             row_idx,
             factored,
+            extra,
         }) = self.system.as_mut()
         else {
             return Err(method_error("no linear system was built".to_owned()));
@@ -547,6 +572,7 @@ impl Solver for ImplicitEuler {
             v.resize(n, 0.0);
         }
 
+        let tolerance = self.tolerance / f64::from(params.steps_per_frame);
         let mut iterations = 0;
         let mut residual = 0.0;
         while iterations < MAX_NEWTON_ITERATIONS {
@@ -563,19 +589,25 @@ impl Solver for ImplicitEuler {
                 row_idx,
                 values: &self.values,
             };
-            let solved = *factored
-                && pcg(
+            let solved = if *factored && *extra < REFACTOR_BUDGET {
+                pcg(
                     &matrix,
                     chol,
                     &self.grad,
                     &mut self.rhs,
                     &mut self.cg,
                     MAX_PCG_ITERATIONS,
-                )?;
-            if !solved {
+                )?
+            } else {
+                None
+            };
+            if let Some(its) = solved {
+                *extra += its - 1;
+            } else {
                 *factored = false;
                 chol.factorize(&self.values).map_err(method_error)?;
                 *factored = true;
+                *extra = 0;
                 for (r, g) in self.rhs.iter_mut().zip(&self.grad) {
                     *r = -g;
                 }
@@ -586,7 +618,7 @@ impl Solver for ImplicitEuler {
             if !residual.is_finite() {
                 break;
             }
-            if residual <= self.tolerance {
+            if residual <= tolerance {
                 apply_step(&topo.free_points, &mut self.x, dx, 1.0);
                 break;
             }
@@ -610,14 +642,15 @@ impl Solver for ImplicitEuler {
                 break;
             }
             std::mem::swap(&mut self.x, &mut self.trial);
-            if alpha * residual <= self.tolerance {
+            if alpha * residual <= tolerance {
                 break;
             }
         }
 
+        retime_friction(colliders, params, &mut self.colliders);
         commit(
             mesh,
-            colliders,
+            &self.colliders,
             params,
             state,
             &topo.free_points,

@@ -36,7 +36,7 @@ mod topology;
 
 pub use fast_implicit::{DEFAULT_ITERATIONS, FAST_TOLERANCE, FastImplicit, limit_weight};
 pub use implicit_euler::{
-    ImplicitEuler, MAX_NEWTON_ITERATIONS, MAX_PCG_ITERATIONS, NEWTON_TOLERANCE,
+    ImplicitEuler, MAX_NEWTON_ITERATIONS, MAX_PCG_ITERATIONS, NEWTON_TOLERANCE, REFACTOR_BUDGET,
 };
 pub use retime::retime_velocity;
 pub use spring_energy::{LIMIT_OVERSHOOT, limiter_stiffness};
