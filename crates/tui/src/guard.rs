@@ -6,12 +6,13 @@
 //!
 //! - **Non-finite state**: a position is NaN or infinite. Nothing can be drawn or continued.
 //! - **Runaway**: over the last [`WINDOW`] seconds of simulated time (or since the start, when
-//!   shorter) the fastest point got at least [`GROWTH`] times faster *and* the kinetic energy grew at least `GROWTH^2` times, and
-//!   the fastest point is faster than anything gravity could have made it (`|g| t`, plus
-//!   [`SPEED_MARGIN`] for what stretched springs give back). An unstable explicit integration
-//!   multiplies its error by a constant factor every step, so it passes all three tests within
-//!   a few frames; a stretched cloth settling (speeds bounded by the spring energy it started
-//!   with) or a free fall (speed `g t`, energy `t^2`: it never outruns gravity) passes none.
+//!   shorter) the fastest point got at least [`GROWTH`] times faster *and* the kinetic energy grew
+//!   at least `GROWTH^2` times, and the fastest point is faster than anything gravity could have
+//!   made it (`|g| t`, plus [`SPEED_MARGIN`] for what stretched springs give back). An unstable
+//!   explicit integration multiplies its error by a constant factor every step, so it passes all
+//!   three tests within a few frames; a stretched cloth settling (speeds bounded by the spring
+//!   energy it started with) or a free fall (speed `g t`, energy `t^2`: it never outruns gravity)
+//!   passes none.
 //!
 //! A stretched spring is not a divergence: with the stretch limit off a hanging cloth settles
 //! at several times its rest length, which is the course's experiment, not a failure.

@@ -8,12 +8,12 @@ use super::SpatialHash;
 /// One axis of a box key: `floor(v) + 2^20`, wrapped to 21 bits, for `v` the coordinate in
 /// box sizes.
 ///
-/// NOTE: written with plain float adds and integer bit operations, not `f64::floor` (a libm
-/// call on baseline x86-64), so the key loop has no call in it. Adding `1.5 * 2^52` rounds `v` to the nearest integer and leaves that
-/// integer, in two's complement, in the low mantissa bits; one is taken off where rounding went
-/// up. That is `floor(v)` exactly for every |v| < 2^51. Beyond (a point a million boxes away, or
-/// a non-finite one) the key is some box: such points are far beyond `2 * thickness` of any
-/// other, and a diverged step is reported by the solver anyway.
+/// NOTE: written with plain float adds and integer bit operations, not `f64::floor` (a libm call on
+/// baseline x86-64), so the key loop has no call in it. Adding `1.5 * 2^52` rounds `v` to the
+/// nearest integer and leaves that integer, in two's complement, in the low mantissa bits; one is
+/// taken off where rounding went up. That is `floor(v)` exactly for every |v| < 2^51. Beyond (a
+/// point a million boxes away, or a non-finite one) the key is some box: such points are far beyond
+/// `2 * thickness` of any other, and a diverged step is reported by the solver anyway.
 #[inline(always)]
 #[allow(clippy::inline_always)]
 pub(super) fn box_bits(v: f64) -> u64 {

@@ -48,22 +48,21 @@ impl Repulsion {
     /// box still certainly clear, given the smallest squared distance `closest2` between two of
     /// its points; negative when no move is safe.
     ///
-    /// Two points that each moved less than `a` are closer than before by less than `2 a`
-    /// (triangle inequality), so with `a = (closest - reach) / 2` every pair stays at least
-    /// `reach` apart, and [`Repulsion::closest_pair_out_of_reach`] would find the box clear
-    /// again. A pair's distance changes only by the difference of its two points' moves, which
-    /// is unchanged when the same shift is taken off both: so the moves are measured from the
-    /// move of the box's first point. A box carried along by the cloth stays skipped: a
-    /// falling cloth moves its points several allowances a step, but a box's points barely
-    /// against each other. Why that holds in floating point too: every quantity here and in
-    /// the displacement test (a squared distance, its root, a product) is within a few ulps, under 1e-15
-    /// relative, of its real value; each term below is shrunk (or, for the reach, grown) by
-    /// 1e-12 relative, a thousand times that, and the 4-ulp margin of `reach2_out` lies well
-    /// inside it. Taking the shift off a move rounds in proportion to the moves, not to what is
-    /// left: the shift is therefore bounded by a thousand allowances ([`FOLLOW2`]), which keeps
-    /// that rounding under 2.3e-13 of the allowance, inside the slack too. So a box skipped by
-    /// the test is one whose pair test would have found no pair within reach: skipping it
-    /// changes nothing, bit for bit.
+    /// Two points that each moved less than `a` are closer than before by less than `2 a` (triangle
+    /// inequality), so with `a = (closest - reach) / 2` every pair stays at least `reach` apart,
+    /// and [`Repulsion::closest_pair_out_of_reach`] would find the box clear again. A pair's
+    /// distance changes only by the difference of its two points' moves, which is unchanged when
+    /// the same shift is taken off both: so the moves are measured from the move of the box's first
+    /// point. A box carried along by the cloth stays skipped: a falling cloth moves its points
+    /// several allowances a step, but a box's points barely against each other. Why that holds in
+    /// floating point too: every quantity here and in the displacement test (a squared distance,
+    /// its root, a product) is within a few ulps, under 1e-15 relative, of its real value; each
+    /// term below is shrunk (or, for the reach, grown) by 1e-12 relative, a thousand times that,
+    /// and the 4-ulp margin of `reach2_out` lies well inside it. Taking the shift off a move rounds
+    /// in proportion to the moves, not to what is left: the shift is therefore bounded by a
+    /// thousand allowances ([`FOLLOW2`]), which keeps that rounding under 2.3e-13 of the allowance,
+    /// inside the slack too. So a box skipped by the test is one whose pair test would have found
+    /// no pair within reach: skipping it changes nothing, bit for bit.
     #[inline]
     pub(super) fn allowance(&self, closest2: f64) -> f64 {
         const SLACK: f64 = 1e-12;

@@ -1,9 +1,9 @@
 //! The one table of live parameters: label, unit, range, steps, how to read and write it.
 //!
-//! The parameter panel, its keys (select, nudge, type a value, restore) and the prompt's
-//! validation all read the rows of [`row`]: the fixed [`PARAMS`], then one row per numeric option
-//! of the active solver, made from its registry entry. Adding a parameter is one entry here. Values are shown
-//! and edited in the units of the course's GUI (density in g/cm^2, damping in percent);
+//! The parameter panel, its keys (select, nudge, type a value, restore) and the prompt's validation
+//! all read the rows of [`row`]: the fixed [`PARAMS`], then one row per numeric option of the
+//! active solver, made from its registry entry. Adding a parameter is one entry here. Values are
+//! shown and edited in the units of the course's GUI (density in g/cm^2, damping in percent);
 //! `get`/`set` convert to and from the SI units of [`StepParams`].
 
 use cloth_solver::{Collider, OptionKind, SolverEntry, StepParams, Vec3};

@@ -1,8 +1,9 @@
 //! The running cloth: scene, live settings, state, solver, simulated clock and diagnostics.
 //!
-//! Time here is simulated time only. Whoever steps it (a [`super::worker::Worker`], compare
-//! mode's [`super::lockstep::Lockstep`], or a test) decides how many steps to take; nothing in this module reads a clock, so the same calls give
-//! the same bits. Each frame ends with the divergence guard ([`crate::guard`]).
+//! Time here is simulated time only. Whoever steps it (a [`super::worker::Worker`], compare mode's
+//! [`super::lockstep::Lockstep`], or a test) decides how many steps to take; nothing in this module
+//! reads a clock, so the same calls give the same bits. Each frame ends with the divergence guard
+//! ([`crate::guard`]).
 
 use std::collections::VecDeque;
 use std::sync::Arc;
