@@ -53,9 +53,9 @@
 //!
 //! NOTE: the multiplier is a vector fixed in space, not a length along the spring's current
 //! direction. A binding spring's tension is `w_s |u_s|`; where it exceeds `w_s 1.1 L_s` the
-//! target `q_s` points against the spring. A fine grid's springs carry the same cloth's weight
-//! with `w_s L_s` halved at each halving of the spacing, so a hanging cloth's corner springs are
-//! in that state (on pinned4 at 100 x 100 points, `|u_s|` reaches several `L_s`). Read along
+//! target `q_s` points against the spring. pinned4's corner springs hang in that state at
+//! rest, and the more so the finer the grid: its springs carry the same cloth's weight while
+//! `w_s L_s` halves with each halving of the spacing, so `|u_s| / L_s` doubles. Read along
 //! `d_s / |d_s|`, such a target would turn with a spring that the global step swings through
 //! zero, and each swing would add `|d_s| - 1.1 L_s` to the multiplier where the vector update
 //! `u_s <- u_s + d_s - z_s` takes about `|d_s| + 1.1 L_s` off it: the swings would grow without
