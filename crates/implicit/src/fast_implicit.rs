@@ -33,40 +33,51 @@
 //! instead: the constraint `|d_s| <= 1.1 L_s` on the step's positions, in the projective-dynamics
 //! form of a projection in the local step. Its term `w_s/2 |d_s - q_s|^2` pulls each spring
 //! vector towards its projection onto the allowed ball `|q| <= 1.1 L_s`, with a scaled
-//! multiplier `mu_s >= 0` per spring (ADMM, Overby et al. 2017) that turns the penalty into the
-//! exact constraint as the iterations converge:
+//! multiplier `u_s` per spring, a vector (ADMM, Overby et al. 2017), that turns the penalty into
+//! the exact constraint as the iterations converge:
 //!
 //! ```text
-//! z_s  = min(|d_s| + mu_s, 1.1 L_s) d_s / |d_s|          (projection onto the ball)
-//! mu_s <- mu_s + |d_s| - |z_s|                            (>= 0: the tension over w_s)
-//! q_s  = z_s - mu_s d_s / |d_s|
+//! v_s  = d_s + u_s
+//! z_s  = v_s min(1, 1.1 L_s / |v_s|)                      (projection onto the ball)
+//! u_s <- v_s - z_s                                        (the tension over w_s)
+//! q_s  = z_s - u_s
 //! ```
 //!
-//! A slack spring gets `mu_s = 0` and `q_s = d_s`: its term adds nothing to the right-hand side.
+//! A slack spring gets `u_s = 0` and `q_s = d_s`: its term adds nothing to the right-hand side.
 //! A spring already beyond the limit (a state left by the course's sweep, a swap from Verlet,
-//! an edit of `ks`) is pulled back by at most the distance to its projection, weighted against
-//! the mass and the other springs in the same convex solve, so no start, however stretched, can
-//! make a step overshoot: the projection is bounded by construction, where a penalty force or a
-//! free multiplier ascent grows with the violation. `w_s` is [`limit_weight`]: the spring's own
-//! stiffness plus the inertia, which makes the ADMM iteration converge at about the rate of the
-//! springs' own local/global iteration. The multipliers are warm-started from the previous step
-//! (a cache: [`Solver::reset`] and a solver swap drop it, costing a few steps of convergence).
+//! an edit of `ks`) is pulled towards its projection, weighted against the mass and the other
+//! springs in the same convex solve. `w_s` is [`limit_weight`]: the spring's own stiffness plus
+//! the inertia, which makes the ADMM iteration converge at about the rate of the springs' own
+//! local/global iteration. The multipliers are warm-started from the previous step (a cache:
+//! [`Solver::reset`] and a solver swap drop it, costing a few steps of convergence).
+//!
+//! NOTE: the multiplier is a vector fixed in space, not a length along the spring's current
+//! direction. A binding spring's tension is `w_s |u_s|`; where it exceeds `w_s 1.1 L_s` the
+//! target `q_s` points against the spring. pinned4's corner springs hang in that state at
+//! rest, and the more so the finer the grid: its springs carry the same cloth's weight while
+//! `w_s L_s` halves with each halving of the spacing, so `|u_s| / L_s` doubles. Read along
+//! `d_s / |d_s|`, such a target would turn with a spring that the global step swings through
+//! zero, and each swing would add `|d_s| - 1.1 L_s` to the multiplier where the vector update
+//! `u_s <- u_s + d_s - z_s` takes about `|d_s| + 1.1 L_s` off it: the swings would grow without
+//! bound, while the vector form is the standard scaled ADMM, whose multiplier the swing shrinks.
 //!
 //! # Stability
 //!
-//! Every global step is a convex quadratic solve with a positive-definite matrix, and every
-//! local step a projection onto a bounded set, so an iterate can move no point farther than the
-//! targets it is pulled to: the iteration is stable for any step, stiffness and start. Without
-//! the limit each local step and each global step lowers `Phi` (Liu et al.'s block descent), so
-//! even a truncated step ends with `Phi` no higher than at its start. Starting from `y` alone
-//! would bound the result by the springs' energy at `y`, which stiff springs and a velocity
-//! field that stretches them (a collision's or self-collision's push) make far larger than the
-//! energy the cloth has; starting from the lower of `Phi(y)` and `Phi(x0)` bounds it by
-//! `Phi(x0)`, the start's own spring energy plus the kinetic energy the prediction carries, so
-//! a truncated step cannot create energy. With few iterations it under-resolves stiff springs,
-//! which makes the cloth look softer and more damped, never unstable. At convergence the step equals [`ImplicitEuler`]'s up to the form of
-//! the limit (exact here, a stiff penalty there). Both implicit solvers are meant to run at
-//! one step per frame.
+//! Every global step is a convex quadratic solve with a positive-definite matrix, stable for any
+//! step and stiffness. Without the limit each local step and each global step lowers `Phi`
+//! (Liu et al.'s block descent), so even a truncated step ends with `Phi` no higher than at its
+//! start. Starting from `y` alone would bound the result by the springs' energy at `y`, which
+//! stiff springs and a velocity field that stretches them (a collision's or self-collision's
+//! push) make far larger than the energy the cloth has; starting from the lower of `Phi(y)` and
+//! `Phi(x0)` bounds it by `Phi(x0)`, the start's own spring energy plus the kinetic energy the
+//! prediction carries, so a truncated step cannot create energy. With the limit on, the
+//! iteration is ADMM, which need not lower `Phi` at every iteration: for a convex energy and a
+//! convex constraint its standard form converges at any weight, but the springs' energy is not
+//! convex (a compressed spring), so this is an argument rather than a proof, and a run that
+//! diverges all the same is stopped by the front ends' divergence guard. With few iterations the
+//! solver under-resolves stiff springs, which makes the cloth look softer and more damped. At
+//! convergence the step equals [`ImplicitEuler`]'s up to the form of the limit (exact here, a
+//! stiff penalty there). Both implicit solvers are meant to run at one step per frame.
 //!
 //! # Collisions
 //!
@@ -122,8 +133,8 @@ pub struct FastImplicit {
     /// Local/global iterations per step, at most (at least 1).
     iterations: u32,
     tolerance: f64,
-    /// Scaled multipliers of the stretch limit, m, one per spring (warm start).
-    mu: Vec<f64>,
+    /// Scaled multipliers of the stretch limit, m, one vector per spring (warm start).
+    mu: Vec<Vec3>,
     rhs: Vec<f64>,
     y: Vec<Vec3>,
     x: Vec<Vec3>,
@@ -223,8 +234,8 @@ impl FastImplicit {
         let n = topo.free() as u64;
         let pattern = 8 * 2 * col_ptr.len() as u64 + 8 * row_idx.len() as u64;
         let values = 8 * row_idx.len() as u64;
-        // rhs (3 per free point), y and x (3 per point), the multipliers (1 per spring).
-        let scratch = 8 * (3 * n + 6 * mesh.len() as u64 + mesh.springs().len() as u64);
+        // rhs (3 per free point), y and x (3 per point), the multipliers (3 per spring).
+        let scratch = 8 * (3 * n + 6 * mesh.len() as u64 + 3 * mesh.springs().len() as u64);
         topo.bytes() + pattern + values + factor.bytes() + scratch
     }
 
@@ -253,8 +264,12 @@ impl FastImplicit {
             });
         }
         if self.mu.len() != mesh.springs().len() {
-            self.mu = try_filled(mesh.springs().len(), 0.0, "the stretch-limit multipliers")
-                .map_err(alloc_error)?;
+            self.mu = try_filled(
+                mesh.springs().len(),
+                Vec3::zeros(),
+                "the stretch-limit multipliers",
+            )
+            .map_err(alloc_error)?;
         }
         let Some(sys) = self.system.as_mut() else {
             return Err(method_error("no linear system was built".to_owned()));
@@ -332,7 +347,7 @@ impl Solver for FastImplicit {
     }
 
     fn reset(&mut self) {
-        self.mu.fill(0.0);
+        self.mu.fill(Vec3::zeros());
     }
 
     fn step(
@@ -360,7 +375,7 @@ impl Solver for FastImplicit {
         let n = topo.free();
         let weight = params.gravity * mass;
         if !params.stretch_limit {
-            self.mu.fill(0.0);
+            self.mu.fill(Vec3::zeros());
         }
         let limits = KINDS.map(|kind| {
             if params.stretch_limit {
@@ -415,18 +430,19 @@ impl Solver for FastImplicit {
                 } else {
                     (starts[b] - starts[a]) / s.rest
                 };
-                // Length of the target vector of each term along u: the spring's p (rest
-                // length) and the limit's q.
-                let mut pull = k * s.rest;
+                // The weighted targets of the two terms: the spring's p (its rest length along
+                // u) and the limit's q.
+                let mut pull = u * (k * s.rest);
                 if w > 0.0 {
-                    let mu = self.mu[i];
-                    let z = (len + mu).min(MAX_STRETCH * s.rest);
-                    let mu = mu + len - z;
+                    let v = d + self.mu[i];
+                    let r = v.norm();
+                    let cap = MAX_STRETCH * s.rest;
+                    let z = if r > cap { v * (cap / r) } else { v };
+                    let mu = v - z;
                     self.mu[i] = mu;
-                    pull += w * (z - mu);
+                    pull += (z - mu) * w;
                 }
                 let tie = k + w;
-                let pull = u * pull;
                 if fb != NONE {
                     let mut g = pull;
                     if fa == NONE {

@@ -233,6 +233,65 @@ fn fast_implicit_settles_pinned4_at_one_and_five_steps_per_frame() {
 }
 
 #[test]
+fn fast_implicit_holds_pinned4_at_100_x_100_points_at_one_step_per_frame() {
+    // pinned4's settings on a 100 x 100 grid (pins at the corners, the thickness scaled with
+    // the spacing), through the fall, the catch on the stretch limit (about frame 25) and the
+    // rebound. Its corner springs hold more tension than the limit's weight times 1.1 rest
+    // (see the fast_implicit module doc), the state a fine grid's hanging cloth is in.
+    //
+    // The bound: backward Euler dissipates. The step minimises the incremental potential, whose
+    // value at the start bounds the new kinetic plus potential energy; the drag takes energy
+    // out and the limit, a constraint, does no work. From rest with every spring at its rest
+    // length, the kinetic energy is then at most the work gravity has done, m g . (x - x0)
+    // summed over the points, at every frame, with no allowance: the first step from rest
+    // already gives only 1 / (2 (1 + c h)) = 0.47 of it (c h = 0.06), and more of that work goes
+    // into the springs and the drag as the cloth catches. Self-collision moves a point only
+    // when another comes within the 4.7 mm thickness, which the flat fall does not do: moving
+    // every one of the 10,000 points (0.015 kg each) by that much within a 1/90 s step would
+    // give them 0.5 x 150 kg x (0.0047 x 90 m/s)^2 = 13 J, against hundreds of J of gravity's
+    // work by the time the cloth has sagged enough to fold. A cloth that blows up passes the
+    // bound within a frame or two of starting to.
+    let n: u32 = 100;
+    let sets = [
+        format!("cloth.num_width_points={n}"),
+        format!("cloth.num_height_points={n}"),
+        format!("cloth.pinned=[[0,0],[0,{m}],[{m},0],[{m},{m}]]", m = n - 1),
+        format!("cloth.thickness={}", 0.0095 * 49.0 / f64::from(n - 1)),
+        "simulation.simulation_steps=1".to_owned(),
+    ];
+    let scene = cloth_scene::load("pinned4", &sets).unwrap_or_else(|e| panic!("{e}"));
+    let params = scene.params;
+    assert_eq!(params.steps_per_frame, 1);
+    let mass = scene.mesh.point_mass(params.density);
+    let mut state = ClothState::new(&scene.mesh);
+    let start = state.positions.clone();
+    let mut solver = FastImplicit::new();
+    for f in 1..=45 {
+        advance_frame(
+            &mut solver,
+            &scene.mesh,
+            &scene.colliders,
+            &params,
+            &mut state,
+        )
+        .unwrap_or_else(|e| panic!("frame {f}: {e}"));
+        let work: f64 = state
+            .positions
+            .iter()
+            .zip(&start)
+            .map(|(x, x0)| mass * params.gravity.dot(&(x - x0)))
+            .sum();
+        let ke = kinetic_energy(&state, mass, params.dt());
+        assert!(
+            ke <= work,
+            "frame {f}: kinetic energy {ke:.4e} J above gravity's work {work:.4e} J (largest \
+             stretch {:.3e})",
+            cloth_solver::max_stretch_ratio(&scene.mesh, &state)
+        );
+    }
+}
+
+#[test]
 #[ignore = "long, and not met yet: fast-implicit does not settle on every scene, step count and switch"]
 fn fast_implicit_is_finite_and_settles_on_every_scene_step_count_and_switch() {
     every_scene_at(&[1, 2, 5, 10, 30], &["fast-implicit"]);
