@@ -797,6 +797,8 @@ fn newton(
     let free_points = &problem.topo.free_points;
     let mut converged = false;
     let mut iterations = 0;
+    // Phi at x when the line search has just computed it.
+    let mut phi_x = None;
     let mut residual = 0.0;
     while iterations < max_iterations {
         iterations += 1;
@@ -841,21 +843,21 @@ fn newton(
             break;
         }
         // Armijo backtracking on Phi along dx; the slope grad . dx = -dx^T H dx is < 0.
-        let phi0 = problem.potential(x, y);
+        let phi0 = phi_x.unwrap_or_else(|| problem.potential(x, y));
         let slope: f64 = lin.grad.iter().zip(dx).map(|(g, d)| g * d).sum();
         let mut alpha = 1.0;
-        let mut accepted = false;
+        phi_x = None;
         for _ in 0..=MAX_HALVINGS {
             trial.clone_from(x);
             apply_step(free_points, trial, dx, alpha);
             let phi = problem.potential(trial, y);
             if phi <= phi0 + ARMIJO * alpha * slope {
-                accepted = true;
+                phi_x = Some(phi);
                 break;
             }
             alpha *= 0.5;
         }
-        if !accepted {
+        if phi_x.is_none() {
             // No decrease left that rounding can see: the iterate is as good as it gets.
             converged = true;
             break;
