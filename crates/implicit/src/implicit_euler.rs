@@ -132,20 +132,25 @@ use crate::topology::{NONE, Topology};
 /// [`ImplicitEuler::with_tolerance`].
 pub const NEWTON_TOLERANCE: f64 = 1e-5;
 
-/// At most this many Newton iterations per step; a step that has not converged by then keeps its
-/// last (energy-decreasing) iterate and reports its residual.
+/// At most this many Newton iterations per solve (a step solves once, and again after each
+/// update of the stretch limit's multipliers); a solve that has not converged by then keeps its
+/// last (energy-decreasing) iterate, the step reports its residual and leaves the multipliers
+/// as they were.
 pub const MAX_NEWTON_ITERATIONS: u32 = 50;
 
 /// At most this many updates of the stretch limit's multipliers per step, each followed by a
-/// Newton solve; a step that has not converged by then keeps its last (energy-decreasing)
-/// iterate and carries its multipliers to the next step.
+/// Newton solve; a step that has not met [`LIMIT_TOLERANCE`] by then keeps its last
+/// (energy-decreasing) iterate and carries its multipliers to the next step. Bertsekas' rule
+/// takes the penalty from its least value to the stiff limit's in four updates that make no
+/// progress (a factor of about 1,400 at the course's defaults), so twelve leave room for as
+/// many that do.
 pub const MAX_LIMIT_UPDATES: u32 = 12;
 
 /// A step updates the stretch limit's multipliers and solves again while a spring is over
 /// `1.1 rest` by more than this fraction of its rest length: 2 %, a fifth of the limit's own
-/// 10 % and well within the 7 % the course's sweep leaves while a cloth falls. At rest the
-/// penalty grows to the stiff limit's (see [`RESTING_SPEED`]), which holds every spring within
-/// [`LIMIT_OVERSHOOT`](crate::LIMIT_OVERSHOOT) of the limit.
+/// 10 % and well within the 7 % the course's sweep leaves while a cloth falls. Once the cloth
+/// rests (no point faster than 1 mm/s) the penalty grows to the stiff limit's, which holds
+/// every spring within [`LIMIT_OVERSHOOT`](crate::LIMIT_OVERSHOOT) of the limit.
 pub const LIMIT_TOLERANCE: f64 = 0.02;
 
 /// A step that moves no point faster than this, m/s, counts as at rest for the stretch limit's
