@@ -64,20 +64,20 @@
 //! # Stability
 //!
 //! Every global step is a convex quadratic solve with a positive-definite matrix, stable for any
-//! step and stiffness. Without the limit each local step and each global step lowers `Phi`
-//! (Liu et al.'s block descent), so even a truncated step ends with `Phi` no higher than at its
-//! start. Starting from `y` alone would bound the result by the springs' energy at `y`, which
-//! stiff springs and a velocity field that stretches them (a collision's or self-collision's
-//! push) make far larger than the energy the cloth has; starting from the lower of `Phi(y)` and
-//! `Phi(x0)` bounds it by `Phi(x0)`, the start's own spring energy plus the kinetic energy the
-//! prediction carries, so a truncated step cannot create energy. With the limit on, the
-//! iteration is ADMM, which need not lower `Phi` at every iteration: for a convex energy and a
-//! convex constraint its standard form converges at any weight, but the springs' energy is not
-//! convex (a compressed spring), so this is an argument rather than a proof, and a run that
-//! diverges all the same is stopped by the front ends' divergence guard. With few iterations the
-//! solver under-resolves stiff springs, which makes the cloth look softer and more damped. At
-//! convergence the step equals [`ImplicitEuler`]'s up to the form of the limit (exact here, a
-//! stiff penalty there). Both implicit solvers are meant to run at one step per frame.
+//! step and stiffness. Without the limit each local step and each global step lowers `Phi` (Liu et
+//! al.'s block descent), so even a truncated step ends with `Phi` no higher than at its start.
+//! Starting from `y` alone would bound the result by the springs' energy at `y`, which stiff
+//! springs and a velocity field that stretches them (a collision's or self-collision's push) make
+//! far larger than the energy the cloth has; starting from the lower of `Phi(y)` and `Phi(x0)`
+//! bounds it by `Phi(x0)`, the start's own spring energy plus the kinetic energy the prediction
+//! carries, so a truncated step cannot create energy. With the limit on, the iteration is ADMM,
+//! which need not lower `Phi` at every iteration: for a convex energy and a convex constraint its
+//! standard form converges at any weight, but the springs' energy is not convex (a compressed
+//! spring), so this is an argument rather than a proof, and a run that diverges all the same is
+//! stopped by the front ends' divergence guard. With few iterations the solver under-resolves stiff
+//! springs, which makes the cloth look softer and more damped. At convergence the step equals
+//! [`ImplicitEuler`]'s up to the form of the limit (exact here, a stiff penalty, reached by
+//! multipliers, there). Both implicit solvers are meant to run at one step per frame.
 //!
 //! # Collisions
 //!

@@ -13,74 +13,117 @@
 //!
 //! ```text
 //! Phi(x) = (1 + c h) / (2 h^2) |x - y|_M^2 + E(x),   y = x0 + h v0 / (1 + c h),
-//! E(x)   = sum_springs k/2 (|d| - L)^2 + k_lim/2 max(0, |d| - 1.1 L)^2 - sum_i m g . x_i
+//! E(x)   = sum_springs [k/2 (|d| - L)^2 + psi(|d|)] - sum_i m g . x_i
 //! ```
 //!
-//! (`y` is the damped inertial prediction, `d = x_b - x_a`). Each step minimises `Phi` over the
-//! free points by Newton's method: the Hessian is the mass term `m (1 + c h) / h^2 I` plus, per
-//! spring, `K = E'' u u^T + max(0, T/|d|) (I - u u^T)` on the blocks of its ends (`T` the
-//! tension; the clamp keeps `K` positive semi-definite under compression, see
-//! [`limiter_stiffness`](crate::limiter_stiffness) for `k_lim`). The system
-//! `H dx = -grad Phi` is solved inexactly: by a conjugate gradient preconditioned by the last
-//! Cholesky factor (faer's sparse `L L^T`), kept across iterations and steps while it still
-//! brings the residual below a tenth of the gradient within [`MAX_PCG_ITERATIONS`] iterations
-//! and the solves with it have not together spent [`REFACTOR_BUDGET`] iterations beyond the
-//! first of each, and refactored at the current `H` otherwise. The fill-reducing ordering and symbolic factor
-//! are computed once per topology (points, springs, pins). A backtracking (Armijo) line search
-//! on `Phi` makes every iteration a descent step (a preconditioned conjugate gradient started at
-//! zero always returns a descent direction of a positive-definite `H`). Newton stops once a
-//! step moves no point farther than the tolerance over the steps per frame
-//! ([`NEWTON_TOLERANCE`]). Pinned points are not unknowns: their springs add to their
+//! (`y` is the damped inertial prediction, `d = x_b - x_a`, `psi` the stretch limit's term,
+//! below). Each step minimises `Phi` over the free points by Newton's method, starting from
+//! `y`: the Hessian is the mass term `m (1 + c h) / h^2 I` plus, per spring,
+//! `K = E'' u u^T + max(0, T/|d|) (I - u u^T)` on the blocks of its ends (`T` the tension; the
+//! clamp keeps `K` positive semi-definite under compression). The system `H dx = -grad Phi` is
+//! solved inexactly: by a conjugate gradient preconditioned by the last Cholesky factor
+//! (faer's sparse `L L^T`), kept across iterations, multiplier updates, penalty changes and
+//! steps while it still brings the residual below three tenths of the gradient within
+//! [`MAX_PCG_ITERATIONS`] iterations and the solves with it have not together spent
+//! [`REFACTOR_BUDGET`] iterations beyond the first of each, and refactored at the current `H`
+//! otherwise. The fill-reducing ordering and symbolic factor are computed once per topology
+//! (points, springs, pins). A backtracking (Armijo) line search on `Phi` makes every iteration
+//! a descent step (a preconditioned conjugate gradient started at zero always returns a
+//! descent direction of a positive-definite `H`). A Newton solve has converged once a step
+//! moves no point farther than the tolerance over the steps per frame ([`NEWTON_TOLERANCE`]),
+//! or once the line search finds no decrease that rounding can see; it gives up after
+//! [`MAX_NEWTON_ITERATIONS`]. Pinned points are not unknowns: their springs add to their
 //! neighbours' diagonal blocks and gradients only.
 //!
 //! # The stretch limit
 //!
 //! The course keeps springs at most 10 % over rest by a sweep after each step (Provot's
-//! correction), which a large step outruns and which leaves a falling cloth's springs up to
-//! about 1.17 L. Here the limit is a clamped penalty inside the energy: the one-sided spring
-//! `k_lim/2 max(0, |d| - 1.1 L)^2`, stiff enough that the whole cloth's weight stretches a
-//! spring at most 0.1 % past the limit ([`limiter_stiffness`](crate::limiter_stiffness)). Its
-//! Hessian stays positive semi-definite, and the line search on `Phi` makes a state that
-//! starts far beyond the limit (a swap from Verlet, an edit of `ks`) a descent from a high
-//! potential: the step pulls the springs back, it cannot overshoot.
+//! correction): one spring after another, so that later corrections stretch earlier springs
+//! again, which a large step outruns and which leaves a falling cloth's springs up to about
+//! 1.17 L. Here the limit is a force inside the step's minimisation, on all springs at once and
+//! weighed against the mass and the springs. Its model is the stiff one-sided spring
+//! `k_lim/2 max(0, g)^2`, `g = |d| - 1.1 L` ([`limiter_stiffness`](crate::limiter_stiffness):
+//! the whole cloth's weight stretches a spring at most 0.1 % of its rest length past the
+//! limit); the rest states of this solver are that spring's. Newton does not carry `k_lim`
+//! while the cloth moves: a spring that starts or stops binding would change the Newton matrix
+//! by `k_lim`, which the kept factor no longer approximates. The limit is instead solved by the
+//! method of multipliers, with one multiplier `lambda >= 0` (the limit tension, N) per spring
+//! and a penalty `rho` from `10 max(ks, m (1 + c h) / h^2)` up to `k_lim`
+//! (`limit_penalty` in `spring_energy.rs`), in the term
+//!
+//! ```text
+//! psi(|d|) = (max(0, a + rho g)^2 - a^2) / (2 rho),   a = lambda (1 - rho / k_lim),
+//! ```
+//!
+//! whose force along the spring is `max(0, a + rho g)` (at `rho = k_lim`, `psi` is the stiff
+//! spring itself). A step:
+//!
+//! 1. starts from the last step's multipliers (zero after [`Solver::reset`], a change of
+//!    topology or with the limit off) and its penalty (below);
+//! 2. solves `Phi` by Newton for fixed `lambda` and `rho`;
+//! 3. after a converged solve, sets every multiplier to the limit force of the solved state,
+//!    `lambda <- max(0, a + rho g)` (fixed point: `lambda = k_lim max(0, g)`, the stiff
+//!    spring's tension);
+//! 4. stops once no spring is over `1.1 L` by more than [`LIMIT_TOLERANCE`] of its rest
+//!    length, or `rho = k_lim` (the solve was then of the stiff spring), or after
+//!    [`MAX_LIMIT_UPDATES`] updates; otherwise multiplies `rho` by 10 (at most `k_lim`) when
+//!    the largest overshoot has not fallen to a quarter of the last one (Bertsekas' rule), and
+//!    goes back to 2 from the current positions.
+//!
+//! Across steps the penalty starts at its least value, except that a step that starts with a spring
+//! more than [`LIMIT_TOLERANCE`] past the limit (as the course's sweep, a swap from Verlet or an
+//! edit of `ks` leave them) is solved with `rho = k_lim` at once, so that the stretch is taken up
+//! by the stiff spring instead of springing back; and a step whose Newton solve did not converge
+//! (whose multipliers are therefore left as they were) makes the next one's ten times larger, and a
+//! step that moves no point faster than 1 mm/s doubles it; both up to `k_lim`. A cloth at rest thus
+//! ends on the stiff spring, whose rest state the multipliers need not reach, while a moving cloth
+//! keeps the soft penalty that lets the factor be reused.
 //!
 //! After the solve, self-collision and the collision objects are applied as in
 //! [`cloth_solver::Verlet`], with each object's friction retimed to the step as fast-implicit
 //! does (the course's per-step friction applied as the share that its thirty steps a frame
-//! remove, see [`FastImplicit`](crate::FastImplicit)), and `last` is set to the start-of-step positions, so that
-//! `(positions - last) / h` is the new velocity.
+//! remove, see [`FastImplicit`](crate::FastImplicit)), and `last` is set to the start-of-step
+//! positions, so that `(positions - last) / h` is the new velocity.
 //!
 //! # Velocity and solver swaps
 //!
-//! The solver stores nothing between steps: the velocity is `(positions - last) / h` with the
-//! current `h = params.dt()`, exactly Verlet's implied velocity. A live swap with Verlet at the
-//! same `steps_per_frame` therefore keeps the motion. When `h` changes (a different
-//! `steps_per_frame` or `frames_per_sec`), `positions - last` is reinterpreted over the new step,
-//! as in the course's own simulator when the steps per frame are edited; call
-//! [`retime_velocity`](crate::retime_velocity) first to keep the velocity instead.
+//! The velocity is `(positions - last) / h` with the current `h = params.dt()`, exactly
+//! Verlet's implied velocity; besides its caches the solver keeps only the limit's multipliers
+//! and penalty between steps, which start from zero and the least penalty on a new solver. A
+//! live swap with Verlet at the same `steps_per_frame` therefore keeps the motion. When `h`
+//! changes (a different `steps_per_frame` or `frames_per_sec`), `positions - last` is
+//! reinterpreted over the new step, as in the course's own simulator when the steps per frame
+//! are edited; call [`retime_velocity`](crate::retime_velocity) first to keep the velocity
+//! instead.
 //!
 //! # Stability
 //!
-//! Backward Euler is unconditionally stable for this energy: every step lowers `Phi`, so there is
-//! no step-size limit like Verlet's `ks < m / (2 dt^2)`. It damps high frequencies numerically
-//! (first-order accurate), on top of the drag `c`, which is why large-step runs look softer.
-//! The stretch limit is part of the energy, so it holds after a large step where a single
-//! Provot sweep could not undo a step's worth of stretch. The solver is meant to run at one
-//! step per frame.
+//! Backward Euler is unconditionally stable for this energy: there is no step-size limit like
+//! Verlet's `ks < m / (2 dt^2)`. It damps high frequencies numerically (first-order accurate),
+//! on top of the drag `c`, which is why large-step runs look softer. For fixed multipliers and
+//! penalty, `psi` is convex and continuously differentiable in `|d|` and bounded below by
+//! `-a^2 / (2 rho)`, so `Phi` is a well-defined potential, bounded below, with a positive
+//! definite Newton matrix, and every Newton iteration is a descent step on it. The multipliers
+//! are the limit tensions of a solved state (non-negative and finite), so the force a step
+//! carries over is of the size of the forces the last step balanced; a spring that starts far
+//! beyond the limit (a swap from Verlet, an edit of `ks`) is pulled back by a force that grows
+//! with its excess, and the step cannot overshoot. The limit holds after a large step where a
+//! single Provot sweep could not undo a step's worth of stretch. The solver is meant to run at
+//! one step per frame.
 //!
 //! # Damping
 //!
 //! At 100 % damping the drag rate is infinite: the step keeps the cloth where it is with no
 //! velocity (the limit of the damped step as the drag grows), and only the collisions act.
 
-use cloth_mesh::{ClothMesh, ClothState, Vec3};
+use cloth_mesh::{ClothMesh, ClothState, MAX_STRETCH, Vec3};
 use cloth_solver::{Collider, SolveError, Solver, SpatialHash, StepParams, StepReport};
 
 use crate::cholesky::Cholesky;
 use crate::commit::{commit, hold_still, inertial_prediction};
 use crate::memory::{Allocation, check_available, try_filled};
 use crate::retime::retime_friction;
-use crate::spring_energy::{SpringLaw, limiter_stiffness};
+use crate::spring_energy::{SpringLaw, limit_penalty, limiter_stiffness};
 use crate::topology::{NONE, Topology};
 
 /// By default Newton stops once its step moves no point farther than this per frame, metres:
@@ -92,9 +135,42 @@ use crate::topology::{NONE, Topology};
 /// [`ImplicitEuler::with_tolerance`].
 pub const NEWTON_TOLERANCE: f64 = 1e-5;
 
-/// At most this many Newton iterations per step; a step that has not converged by then keeps its
-/// last (energy-decreasing) iterate and reports its residual.
+/// At most this many Newton iterations per solve (a step solves once, and again after each
+/// update of the stretch limit's multipliers); a solve that has not converged by then keeps its
+/// last (energy-decreasing) iterate, the step reports its residual and leaves the multipliers
+/// as they were.
 pub const MAX_NEWTON_ITERATIONS: u32 = 50;
+
+/// At most this many updates of the stretch limit's multipliers per step, each followed by a
+/// Newton solve; a step that has not met [`LIMIT_TOLERANCE`] by then keeps its last
+/// (energy-decreasing) iterate and carries its multipliers to the next step. Bertsekas' rule
+/// takes the penalty from its least value to the stiff limit's in four updates that make no
+/// progress (a factor of about 1,400 at the course's defaults), so twelve leave room for as
+/// many that do.
+pub const MAX_LIMIT_UPDATES: u32 = 12;
+
+/// A step updates the stretch limit's multipliers and solves again while a spring is over
+/// `1.1 rest` by more than this fraction of its rest length: 0.1 %, a hundredth of the limit's
+/// own 10 %. A looser tolerance lets every spring of a falling cloth's hanging column give a
+/// little, and the cloth then drops farther and gathers more kinetic energy than the course's
+/// model gives it (at 2 % and at 0.5 %, 4 % and 2 % more than Verlet's largest in pinned4's
+/// fall). Once the cloth rests (no point faster than 1 mm/s) the penalty grows to the stiff
+/// limit's, which holds every spring within [`LIMIT_OVERSHOOT`](crate::LIMIT_OVERSHOOT) of the
+/// limit.
+pub const LIMIT_TOLERANCE: f64 = 0.001;
+
+/// A step that moves no point faster than this, m/s, counts as at rest for the stretch limit's
+/// penalty, which then doubles each step up to the stiff limit's `k_lim` (a tenth of the 1 cm/s
+/// at which a cloth counts as settled).
+const RESTING_SPEED: f64 = 1e-3;
+
+/// The limit's penalty grows by this factor after a multiplier update that did not take the
+/// largest overshoot down to [`OVERSHOOT_DECREASE`] of the last one (Bertsekas' rule), and for
+/// the next step after a step whose Newton solve did not converge.
+const PENALTY_GROWTH: f64 = 10.0;
+
+/// The fraction of the last overshoot a multiplier update must leave for the penalty to stay.
+const OVERSHOOT_DECREASE: f64 = 0.25;
 
 /// Armijo's sufficient-decrease constant.
 const ARMIJO: f64 = 1e-4;
@@ -115,10 +191,11 @@ pub const MAX_PCG_ITERATIONS: u32 = 6;
 pub const REFACTOR_BUDGET: u32 = 16;
 
 /// The inexact Newton step is accepted once the linear residual is below this fraction of the
-/// gradient (a constant forcing term: Newton then converges linearly at about this rate, fast
-/// enough for the step tolerance within a few iterations, and the line search keeps every
-/// iteration a descent).
-const FORCING: f64 = 0.1;
+/// gradient (a constant forcing term: Newton then converges linearly at about this rate, and
+/// the line search keeps every iteration a descent). The step tolerance is met within a few
+/// iterations more than with a tighter forcing, each of which costs fewer conjugate-gradient
+/// iterations and lets the kept factor serve longer before it is replaced.
+const FORCING: f64 = 0.3;
 
 /// The implicit (backward Euler) solver: Newton's method with a line search on the incremental
 /// potential, on faer's sparse Cholesky. See the module documentation for the method.
@@ -140,6 +217,11 @@ pub struct ImplicitEuler {
     y: Vec<Vec3>,
     x: Vec<Vec3>,
     trial: Vec<Vec3>,
+    /// The stretch limit's multipliers, N, one per spring: the limit tensions of the last
+    /// step, its warm start.
+    lambda: Vec<f64>,
+    /// The factor on the limit's least penalty for the next step.
+    stiffening: f64,
     /// The colliders with their friction retimed to the step.
     colliders: Vec<Collider>,
     hash: SpatialHash,
@@ -200,16 +282,18 @@ impl ImplicitEuler {
             y: Vec::new(),
             x: Vec::new(),
             trial: Vec::new(),
+            lambda: Vec::new(),
+            stiffening: 1.0,
             colliders: Vec::new(),
             hash: SpatialHash::default(),
         }
     }
 
     /// Bytes this solver allocates for `mesh`: the topology, the block matrix's pattern and
-    /// values, its Cholesky factor and workspace, and the per-point scratch. The factor's size
-    /// comes from faer's symbolic analysis of the scalar pattern (one unknown per point), whose
-    /// fill each 3 x 3 block repeats nine times over; the self-collision hash, the same as
-    /// Verlet's, is not counted.
+    /// values, its Cholesky factor and workspace, and the per-point and per-spring scratch. The
+    /// factor's size comes from faer's symbolic analysis of the scalar pattern (one unknown per
+    /// point), whose fill each 3 x 3 block repeats nine times over; the self-collision hash, the
+    /// same as Verlet's, is not counted.
     ///
     /// The analysis takes memory in proportion to the scalar pattern (a small part of the
     /// total); when even that fails, the estimate is `u64::MAX`.
@@ -237,8 +321,8 @@ impl ImplicitEuler {
         let factor = 8 * (9 * scalar_factor).saturating_sub(3 * n);
         let workspace = factor / 4;
         // grad, rhs and the four conjugate-gradient vectors (3 per free point); y, x and trial
-        // (3 per point).
-        let scratch = 8 * (6 * 3 * n + 9 * mesh.len() as u64);
+        // (3 per point); the limit's multipliers and laws (one and four per spring).
+        let scratch = 8 * (6 * 3 * n + 9 * mesh.len() as u64 + 5 * mesh.springs().len() as u64);
         topo.bytes() + pattern + values + factor + workspace + scratch
     }
 
@@ -248,6 +332,7 @@ impl ImplicitEuler {
             return Ok(());
         }
         self.system = None;
+        self.lambda.clear();
         let topo = Topology::new(mesh);
         // Check the whole size before the block pattern, itself large, is built.
         let (scalar_ptr, scalar_idx) = topo.scalar_pattern();
@@ -307,7 +392,7 @@ impl Problem<'_> {
         }
         for (i, s) in self.mesh.springs().iter().enumerate() {
             let law = self.law(i);
-            if law.k == 0.0 && law.k_lim == 0.0 {
+            if law.k == 0.0 && law.rho == 0.0 {
                 continue;
             }
             let len = (x[s.b as usize] - x[s.a as usize]).norm();
@@ -341,7 +426,7 @@ impl Problem<'_> {
         }
         for (i, s) in self.mesh.springs().iter().enumerate() {
             let law = self.law(i);
-            if law.k == 0.0 && law.k_lim == 0.0 {
+            if law.k == 0.0 && law.rho == 0.0 {
                 continue;
             }
             let (a, b) = (s.a as usize, s.b as usize);
@@ -512,6 +597,8 @@ impl Solver for ImplicitEuler {
         if let Some(sys) = self.system.as_mut() {
             sys.factored = false;
         }
+        self.lambda.clear();
+        self.stiffening = 1.0;
     }
 
     fn step(
@@ -542,21 +629,43 @@ impl Solver for ImplicitEuler {
         else {
             return Err(method_error("no linear system was built".to_owned()));
         };
-        let k_lim = if params.stretch_limit {
-            limiter_stiffness(mesh, params)
+        let (k_lim, base) = if params.stretch_limit {
+            let k_lim = limiter_stiffness(mesh, params);
+            (k_lim, limit_penalty(params, inertia, k_lim))
         } else {
-            0.0
+            (0.0, 0.0)
         };
-        let problem = Problem {
+        // A step that starts with a spring already past the limit by more than the tolerance
+        // (the course's sweep leaves such springs, so does a swap from Verlet or an edit of
+        // `ks`) is solved with the stiff spring itself: a soft penalty would let that stretch
+        // spring back and turn it into kinetic energy, which the stiff one absorbs.
+        let stretched_start = k_lim > 0.0
+            && mesh.springs().iter().any(|s| {
+                let len = (state.positions[s.b as usize] - state.positions[s.a as usize]).norm();
+                len - MAX_STRETCH * s.rest > LIMIT_TOLERANCE * s.rest
+            });
+        let mut rho = if stretched_start {
+            k_lim
+        } else {
+            (base * self.stiffening).min(k_lim)
+        };
+        if self.lambda.len() != mesh.springs().len() || rho == 0.0 {
+            self.lambda.clear();
+            self.lambda.resize(mesh.springs().len(), 0.0);
+        }
+        let keep = |rho: f64| if rho > 0.0 { 1.0 - rho / k_lim } else { 0.0 };
+        let mut problem = Problem {
             mesh,
             topo,
             laws: mesh
                 .springs()
                 .iter()
-                .map(|s| SpringLaw {
+                .zip(&self.lambda)
+                .map(|(s, &lambda)| SpringLaw {
                     k: params.stiffness(s.kind),
                     rest: s.rest,
-                    k_lim,
+                    rho,
+                    offset: lambda * keep(rho),
                 })
                 .collect(),
             inertia,
@@ -571,80 +680,83 @@ impl Solver for ImplicitEuler {
         for v in &mut self.cg {
             v.resize(n, 0.0);
         }
+        let mut linear = Linear {
+            chol,
+            col_ptr,
+            row_idx,
+            factored,
+            extra,
+            values: &mut self.values,
+            grad: &mut self.grad,
+            dx: &mut self.rhs,
+            cg: &mut self.cg,
+        };
 
         let tolerance = self.tolerance / f64::from(params.steps_per_frame);
         let mut iterations = 0;
-        let mut residual = 0.0;
-        while iterations < MAX_NEWTON_ITERATIONS {
-            iterations += 1;
-            problem.assemble(
-                &self.x,
+        let mut residual;
+        let mut overshoot_before = f64::INFINITY;
+        let mut unconverged = false;
+        let mut updates = 0;
+        loop {
+            let solve = newton(
+                &problem,
+                &mut linear,
+                &mut self.x,
                 &self.y,
-                col_ptr,
-                &mut self.grad,
-                Some(&mut self.values),
-            );
-            let matrix = Matrix {
-                col_ptr,
-                row_idx,
-                values: &self.values,
-            };
-            let solved = if *factored && *extra < REFACTOR_BUDGET {
-                pcg(
-                    &matrix,
-                    chol,
-                    &self.grad,
-                    &mut self.rhs,
-                    &mut self.cg,
-                    MAX_PCG_ITERATIONS,
-                )?
+                &mut self.trial,
+                tolerance,
+                MAX_NEWTON_ITERATIONS,
+            )?;
+            iterations += solve.iterations;
+            residual = solve.residual;
+            if rho == 0.0 || !residual.is_finite() {
+                break;
+            }
+            if !solve.converged {
+                unconverged = true;
+                break;
+            }
+            // The multiplier update: each becomes the limit force the solve's state carries.
+            let mut overshoot: f64 = 0.0;
+            for ((s, law), lambda) in mesh
+                .springs()
+                .iter()
+                .zip(&problem.laws)
+                .zip(self.lambda.iter_mut())
+            {
+                let len = (self.x[s.b as usize] - self.x[s.a as usize]).norm();
+                overshoot = overshoot.max(law.over(len) / law.rest);
+                *lambda = law.limit_force(len);
+            }
+            if overshoot <= LIMIT_TOLERANCE || rho >= k_lim || updates == MAX_LIMIT_UPDATES {
+                break;
+            }
+            updates += 1;
+            if overshoot > OVERSHOOT_DECREASE * overshoot_before {
+                rho = (PENALTY_GROWTH * rho).min(k_lim);
+            }
+            overshoot_before = overshoot;
+            for (law, &lambda) in problem.laws.iter_mut().zip(&self.lambda) {
+                law.rho = rho;
+                law.offset = lambda * keep(rho);
+            }
+        }
+        if k_lim == 0.0 {
+            self.stiffening = 1.0;
+        } else {
+            let moved = topo
+                .free_points
+                .iter()
+                .map(|&p| (self.x[p as usize] - state.positions[p as usize]).norm())
+                .fold(0.0, f64::max);
+            self.stiffening = if unconverged {
+                (PENALTY_GROWTH * self.stiffening).min(k_lim / base)
+            } else if moved <= RESTING_SPEED * h {
+                (2.0 * self.stiffening).min(k_lim / base)
             } else {
-                None
+                1.0
             };
-            if let Some(its) = solved {
-                *extra += its - 1;
-            } else {
-                *factored = false;
-                chol.factorize(&self.values).map_err(method_error)?;
-                *factored = true;
-                *extra = 0;
-                for (r, g) in self.rhs.iter_mut().zip(&self.grad) {
-                    *r = -g;
-                }
-                chol.solve_in_place(&mut self.rhs).map_err(method_error)?;
-            }
-            let dx = &self.rhs;
-            residual = max_point_norm(dx);
-            if !residual.is_finite() {
-                break;
-            }
-            if residual <= tolerance {
-                apply_step(&topo.free_points, &mut self.x, dx, 1.0);
-                break;
-            }
-            // Armijo backtracking on Phi along dx; the slope grad . dx = -dx^T H dx is < 0.
-            let phi0 = problem.potential(&self.x, &self.y);
-            let slope: f64 = self.grad.iter().zip(dx).map(|(g, d)| g * d).sum();
-            let mut alpha = 1.0;
-            let mut accepted = false;
-            for _ in 0..=MAX_HALVINGS {
-                self.trial.clone_from(&self.x);
-                apply_step(&topo.free_points, &mut self.trial, dx, alpha);
-                let phi = problem.potential(&self.trial, &self.y);
-                if phi <= phi0 + ARMIJO * alpha * slope {
-                    accepted = true;
-                    break;
-                }
-                alpha *= 0.5;
-            }
-            if !accepted {
-                // No decrease left that rounding can see: the iterate is as good as it gets.
-                break;
-            }
-            std::mem::swap(&mut self.x, &mut self.trial);
-            if alpha * residual <= tolerance {
-                break;
-            }
         }
 
         retime_friction(colliders, params, &mut self.colliders);
@@ -662,6 +774,129 @@ impl Solver for ImplicitEuler {
             residual,
         })
     }
+}
+
+/// The Newton matrix's storage, its factor and the vectors of one linear solve.
+struct Linear<'a> {
+    chol: &'a mut Cholesky,
+    col_ptr: &'a [usize],
+    row_idx: &'a [usize],
+    /// Whether `chol` holds a factor (of this or an earlier matrix).
+    factored: &'a mut bool,
+    /// Conjugate-gradient iterations beyond the first of each solve since the last
+    /// factorisation (see [`REFACTOR_BUDGET`]).
+    extra: &'a mut u32,
+    values: &'a mut Vec<f64>,
+    grad: &'a mut Vec<f64>,
+    dx: &'a mut Vec<f64>,
+    cg: &'a mut [Vec<f64>; 4],
+}
+
+/// What one Newton solve did.
+struct Solve {
+    /// Newton iterations done.
+    iterations: u32,
+    /// The last iteration's largest point move, m.
+    residual: f64,
+    /// Whether the solve stopped within the tolerance (or where rounding leaves no descent).
+    converged: bool,
+}
+
+/// Minimises `Phi` from `x` by Newton's method with a line search, for the laws of `problem`:
+/// at most `max_iterations` iterations, each solving `H dx = -grad` inexactly by the conjugate
+/// gradient preconditioned by the kept factor, refactoring when that fails, and stopping once
+/// a step moves no point farther than `tolerance`.
+///
+/// # Errors
+/// A factorisation or solve failed.
+fn newton(
+    problem: &Problem<'_>,
+    lin: &mut Linear<'_>,
+    x: &mut Vec<Vec3>,
+    y: &[Vec3],
+    trial: &mut Vec<Vec3>,
+    tolerance: f64,
+    max_iterations: u32,
+) -> Result<Solve, SolveError> {
+    let free_points = &problem.topo.free_points;
+    let mut converged = false;
+    let mut iterations = 0;
+    // Phi at x when the line search has just computed it.
+    let mut phi_x = None;
+    let mut residual = 0.0;
+    while iterations < max_iterations {
+        iterations += 1;
+        problem.assemble(x, y, lin.col_ptr, lin.grad, Some(lin.values));
+        let matrix = Matrix {
+            col_ptr: lin.col_ptr,
+            row_idx: lin.row_idx,
+            values: lin.values,
+        };
+        let solved = if *lin.factored && *lin.extra < REFACTOR_BUDGET {
+            pcg(
+                &matrix,
+                lin.chol,
+                lin.grad,
+                lin.dx,
+                lin.cg,
+                MAX_PCG_ITERATIONS,
+            )?
+        } else {
+            None
+        };
+        if let Some(its) = solved {
+            *lin.extra += its - 1;
+        } else {
+            *lin.factored = false;
+            lin.chol.factorize(lin.values).map_err(method_error)?;
+            *lin.factored = true;
+            *lin.extra = 0;
+            for (r, g) in lin.dx.iter_mut().zip(lin.grad.iter()) {
+                *r = -g;
+            }
+            lin.chol.solve_in_place(lin.dx).map_err(method_error)?;
+        }
+        let dx = &*lin.dx;
+        residual = max_point_norm(dx);
+        if !residual.is_finite() {
+            break;
+        }
+        if residual <= tolerance {
+            apply_step(free_points, x, dx, 1.0);
+            converged = true;
+            break;
+        }
+        // Armijo backtracking on Phi along dx; the slope grad . dx = -dx^T H dx is < 0.
+        let phi0 = phi_x.unwrap_or_else(|| problem.potential(x, y));
+        let slope: f64 = lin.grad.iter().zip(dx).map(|(g, d)| g * d).sum();
+        let mut alpha = 1.0;
+        phi_x = None;
+        for _ in 0..=MAX_HALVINGS {
+            trial.clone_from(x);
+            apply_step(free_points, trial, dx, alpha);
+            let phi = problem.potential(trial, y);
+            if phi <= phi0 + ARMIJO * alpha * slope {
+                phi_x = Some(phi);
+                break;
+            }
+            alpha *= 0.5;
+        }
+        if phi_x.is_none() {
+            // No decrease left that rounding can see: the iterate is as good as it gets.
+            converged = true;
+            break;
+        }
+        std::mem::swap(x, trial);
+        if alpha * residual <= tolerance {
+            converged = true;
+            break;
+        }
+    }
+    Ok(Solve {
+        iterations,
+        residual,
+        converged,
+    })
 }
 
 #[cfg(test)]
@@ -705,7 +940,8 @@ mod tests {
                 .map(|s| SpringLaw {
                     k: params.stiffness(s.kind),
                     rest: s.rest,
-                    k_lim,
+                    rho: k_lim,
+                    offset: 0.0,
                 })
                 .collect(),
             inertia: mass * (1.0 + params.drag_rate() * h) / (h * h),

@@ -18,11 +18,12 @@
 //! [`StepParams::drag_rate`](cloth_solver::StepParams::drag_rate), so it does not change with
 //! the step (100 % is an infinite drag: the cloth holds still); the 10 % stretch limit is part
 //! of the minimisation rather than the course's post-step sweep (a projection in the local step
-//! for the fast solver, a clamped penalty for Newton; each module says how). Both own only
-//! caches and scratch memory, so a live swap with [`cloth_solver::Verlet`] keeps the cloth's
-//! motion; see [`retime_velocity`] for swaps that change the step. Each states the memory it
-//! needs for a mesh (`memory_estimate`) and reports a cloth too large for the machine as an
-//! error instead of aborting.
+//! for the fast solver, a stiff one-sided spring solved by the method of multipliers for
+//! Newton; each module says how). Both own only caches and scratch memory (and Newton the
+//! limit's multipliers, which a new solver starts at zero), so a live swap with
+//! [`cloth_solver::Verlet`] keeps the cloth's motion; see [`retime_velocity`] for swaps that
+//! change the step. Each states the memory it needs for a mesh (`memory_estimate`) and reports
+//! a cloth too large for the machine as an error instead of aborting.
 
 mod cholesky;
 mod commit;
@@ -36,7 +37,8 @@ mod topology;
 
 pub use fast_implicit::{DEFAULT_ITERATIONS, FAST_TOLERANCE, FastImplicit, limit_weight};
 pub use implicit_euler::{
-    ImplicitEuler, MAX_NEWTON_ITERATIONS, MAX_PCG_ITERATIONS, NEWTON_TOLERANCE, REFACTOR_BUDGET,
+    ImplicitEuler, LIMIT_TOLERANCE, MAX_LIMIT_UPDATES, MAX_NEWTON_ITERATIONS, MAX_PCG_ITERATIONS,
+    NEWTON_TOLERANCE, REFACTOR_BUDGET,
 };
 pub use retime::retime_velocity;
 pub use spring_energy::{LIMIT_OVERSHOOT, limiter_stiffness};
