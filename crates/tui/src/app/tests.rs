@@ -839,14 +839,13 @@ fn snapshot_half_blocks_without_colour_keep_the_shading() {
     insta::assert_snapshot!("half_blocks_100x30", s);
 }
 
-#[test]
-fn the_ui_starts_from_a_state_file_and_carries_on_from_it() {
-    let dir = tempfile::tempdir().unwrap();
+/// A paused pinned4 advanced three frames, and the state file it writes in `dir`.
+fn paused_pinned4_with_a_state_file_at_frame_3(dir: &std::path::Path) -> (App, std::path::PathBuf) {
     let mut source = app_with("pinned4", true);
     for _ in 0..3 {
         press(&mut source, KeyCode::Char('n'));
     }
-    let path = dir.path().join("state.json");
+    let path = dir.join("state.json");
     let file = crate::state_file::StateFile::new(
         &source.sim.scene.mesh,
         &source.sim.state,
@@ -855,6 +854,13 @@ fn the_ui_starts_from_a_state_file_and_carries_on_from_it() {
         source.sim.dt(),
     );
     std::fs::write(&path, serde_json::to_string(&file).unwrap()).unwrap();
+    (source, path)
+}
+
+#[test]
+fn the_ui_starts_from_a_state_file_and_carries_on_from_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut source, path) = paused_pinned4_with_a_state_file_at_frame_3(dir.path());
     let args = Args {
         scene: "pinned4".to_owned(),
         paused: true,
@@ -1137,19 +1143,7 @@ fn compared(app: &App) -> Vec<&super::sim::Simulation> {
 #[test]
 fn every_compared_variant_starts_from_the_state_file_and_a_grid_it_does_not_fit_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let mut source = app_with("pinned4", true);
-    for _ in 0..3 {
-        press(&mut source, KeyCode::Char('n'));
-    }
-    let path = dir.path().join("state.json");
-    let file = crate::state_file::StateFile::new(
-        &source.sim.scene.mesh,
-        &source.sim.state,
-        source.sim.frames,
-        source.sim.time,
-        source.sim.dt(),
-    );
-    std::fs::write(&path, serde_json::to_string(&file).unwrap()).unwrap();
+    let (source, path) = paused_pinned4_with_a_state_file_at_frame_3(dir.path());
     let args = |vary: &str| super::CompareArgs {
         ui: Args {
             scene: "pinned4".to_owned(),
