@@ -58,8 +58,11 @@
 //! whose force along the spring is `max(0, a + rho g)` (at `rho = k_lim`, `psi` is the stiff
 //! spring itself). A step:
 //!
-//! 1. starts from the last step's multipliers (zero after [`Solver::reset`], a change of
-//!    topology or with the limit off) and its penalty (below);
+//! 1. starts from the last step's multipliers extrapolated along their change over that step,
+//!    `max(0, lambda_n + (lambda_n - lambda_(n-1)) / 2)` (a falling cloth's limit tensions
+//!    grow from step to step, and a closer start saves multiplier updates, each a Newton
+//!    solve; zero after [`Solver::reset`], a change of topology or with the limit off, and the
+//!    last step's alone when there is no step before it), and its penalty (below);
 //! 2. solves `Phi` by Newton for fixed `lambda` and `rho`;
 //! 3. after a converged solve, sets every multiplier to the limit force of the solved state,
 //!    `lambda <- max(0, a + rho g)` (fixed point: `lambda = k_lim max(0, g)`, the stiff
@@ -89,12 +92,12 @@
 //!
 //! The velocity is `(positions - last) / h` with the current `h = params.dt()`, exactly
 //! Verlet's implied velocity; besides its caches the solver keeps only the limit's multipliers
-//! and penalty between steps, which start from zero and the least penalty on a new solver. A
-//! live swap with Verlet at the same `steps_per_frame` therefore keeps the motion. When `h`
-//! changes (a different `steps_per_frame` or `frames_per_sec`), `positions - last` is
-//! reinterpreted over the new step, as in the course's own simulator when the steps per frame
-//! are edited; call [`retime_velocity`](crate::retime_velocity) first to keep the velocity
-//! instead.
+//! (of the last two steps) and penalty between steps, which start from zero and the least
+//! penalty on a new solver. A live swap with Verlet at the same `steps_per_frame` therefore
+//! keeps the motion. When `h` changes (a different `steps_per_frame` or `frames_per_sec`),
+//! `positions - last` is reinterpreted over the new step, as in the course's own simulator
+//! when the steps per frame are edited; call [`retime_velocity`](crate::retime_velocity) first
+//! to keep the velocity instead.
 //!
 //! # Stability
 //!
@@ -172,6 +175,13 @@ const PENALTY_GROWTH: f64 = 10.0;
 /// The fraction of the last overshoot a multiplier update must leave for the penalty to stay.
 const OVERSHOOT_DECREASE: f64 = 0.25;
 
+/// A step's multipliers start from the last step's limit tensions moved on by this share of
+/// their change over the last step: a falling cloth's tensions grow from step to step, and
+/// each multiplier update a step saves is a Newton solve. Half the change, rather than all of
+/// it, because the trend turns where the cloth swings back, and a tension overestimated there
+/// costs updates of its own.
+const MULTIPLIER_TREND: f64 = 0.5;
+
 /// Armijo's sufficient-decrease constant.
 const ARMIJO: f64 = 1e-4;
 
@@ -218,8 +228,11 @@ pub struct ImplicitEuler {
     x: Vec<Vec3>,
     trial: Vec<Vec3>,
     /// The stretch limit's multipliers, N, one per spring: the limit tensions of the last
-    /// step, its warm start.
+    /// step, from which the next one's warm start is extrapolated.
     lambda: Vec<f64>,
+    /// The limit tensions of the step before the last (empty when there was none since the
+    /// multipliers were last dropped).
+    lambda_before: Vec<f64>,
     /// The factor on the limit's least penalty for the next step.
     stiffening: f64,
     /// The colliders with their friction retimed to the step.
@@ -283,6 +296,7 @@ impl ImplicitEuler {
             x: Vec::new(),
             trial: Vec::new(),
             lambda: Vec::new(),
+            lambda_before: Vec::new(),
             stiffening: 1.0,
             colliders: Vec::new(),
             hash: SpatialHash::default(),
@@ -321,8 +335,9 @@ impl ImplicitEuler {
         let factor = 8 * (9 * scalar_factor).saturating_sub(3 * n);
         let workspace = factor / 4;
         // grad, rhs and the four conjugate-gradient vectors (3 per free point); y, x and trial
-        // (3 per point); the limit's multipliers and laws (one and four per spring).
-        let scratch = 8 * (6 * 3 * n + 9 * mesh.len() as u64 + 5 * mesh.springs().len() as u64);
+        // (3 per point); the limit's multipliers of the last two steps and laws (two and four
+        // per spring).
+        let scratch = 8 * (6 * 3 * n + 9 * mesh.len() as u64 + 6 * mesh.springs().len() as u64);
         topo.bytes() + pattern + values + factor + workspace + scratch
     }
 
@@ -333,6 +348,7 @@ impl ImplicitEuler {
         }
         self.system = None;
         self.lambda.clear();
+        self.lambda_before.clear();
         let topo = Topology::new(mesh);
         // Check the whole size before the block pattern, itself large, is built.
         let (scalar_ptr, scalar_idx) = topo.scalar_pattern();
@@ -566,6 +582,23 @@ fn pcg(
     Ok(None)
 }
 
+/// Replaces the last step's limit tensions `lambda` by the warm start of the next step,
+/// `max(0, lambda + MULTIPLIER_TREND (lambda - before))` with `before` the tensions of the
+/// step before it (`lambda` itself when there is none), and keeps the last step's tensions in
+/// `before` for the next call.
+fn extrapolate_multipliers(lambda: &mut [f64], before: &mut Vec<f64>) {
+    if before.len() == lambda.len() {
+        for (l, b) in lambda.iter_mut().zip(before.iter_mut()) {
+            let last = *l;
+            *l = (last + MULTIPLIER_TREND * (last - *b)).max(0.0);
+            *b = last;
+        }
+    } else {
+        before.clear();
+        before.extend_from_slice(lambda);
+    }
+}
+
 fn add3(v: &mut [f64], f: usize, g: &Vec3) {
     v[3 * f] += g.x;
     v[3 * f + 1] += g.y;
@@ -598,6 +631,7 @@ impl Solver for ImplicitEuler {
             sys.factored = false;
         }
         self.lambda.clear();
+        self.lambda_before.clear();
         self.stiffening = 1.0;
     }
 
@@ -652,7 +686,9 @@ impl Solver for ImplicitEuler {
         if self.lambda.len() != mesh.springs().len() || rho == 0.0 {
             self.lambda.clear();
             self.lambda.resize(mesh.springs().len(), 0.0);
+            self.lambda_before.clear();
         }
+        extrapolate_multipliers(&mut self.lambda, &mut self.lambda_before);
         let keep = |rho: f64| if rho > 0.0 { 1.0 - rho / k_lim } else { 0.0 };
         let mut problem = Problem {
             mesh,
