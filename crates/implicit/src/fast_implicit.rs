@@ -51,6 +51,23 @@
 //! local/global iteration. The multipliers are warm-started from the previous step (a cache:
 //! [`Solver::reset`] and a solver swap drop it, costing a few steps of convergence).
 //!
+//! That weight serves a moving cloth, but not one at rest on a long taut chain of binding
+//! springs (the hammock's width, a hanging corner at many steps per frame): there the
+//! multipliers converge at about the rate at which the mass term lets the chain's longest mode
+//! move, slower than the iterations of a step can follow, and the step velocity keeps a jitter
+//! of centimetres per second that the drag never removes. A stiffer weight converges the chain
+//! quickly but holds every slack spring to its last iterate, which on a moving cloth damps its
+//! deformation. The weight is therefore raised only once the cloth is still: the solver
+//! watches the free points' root-mean-square speed over windows of 0.25 s; a window below
+//! 2 cm/s in which most steps ran out of iterations before the tolerance (a cloth whose steps
+//! converge needs no raise), with no spring more than 1 % over the limit, raises the weight
+//! tenfold, at most
+//! twice (one refactorisation each), and the multipliers are rescaled so that the tensions they
+//! stand for are kept. A raise after which the next window moves faster than the one before it
+//! is undone and the level held. A window faster than 6 cm/s, a step that starts with a point
+//! faster than 0.5 m/s, the limit switched off or [`Solver::reset`] return the weight to its
+//! least value (the cache, like the multipliers, is the solver's own: a swap starts afresh).
+//!
 //! NOTE: the multiplier is a vector fixed in space, not a length along the spring's current
 //! direction. A binding spring's tension is `w_s |u_s|`; where it exceeds `w_s 1.1 L_s` the
 //! target `q_s` points against the spring. pinned4's corner springs hang in that state at
@@ -98,6 +115,7 @@
 use cloth_mesh::{ClothMesh, ClothState, SpringKind, Vec3};
 use cloth_solver::{
     Collider, MAX_STRETCH, SolveError, Solver, SpatialHash, StepParams, StepReport,
+    max_stretch_ratio,
 };
 
 use crate::cholesky::Cholesky;
@@ -109,6 +127,38 @@ use crate::topology::{NONE, Topology};
 /// By default the local/global iterations of a step stop once a global step moves no point
 /// farther than this, metres (0.1 um: a two-hundredth of the 0.1 % stretch of a 2 cm spring).
 pub const FAST_TOLERANCE: f64 = 1e-7;
+
+/// The factor between successive levels of the stretch limit's penalty.
+const PENALTY_GROWTH: f64 = 10.0;
+
+/// The highest level of the stretch limit's penalty: at most `PENALTY_GROWTH^2` times
+/// [`limit_weight`].
+const MAX_PENALTY_LEVEL: u32 = 2;
+
+/// The span, s, over which the cloth's motion is measured to raise the limit's penalty.
+const QUIET_WINDOW: f64 = 0.25;
+
+/// A window over which the free points' root-mean-square speed stays below this, m/s, raises
+/// the limit's penalty a level.
+const QUIET_SPEED: f64 = 0.02;
+
+/// A window over which the free points' root-mean-square speed exceeds this, m/s, or a step
+/// that starts with a point faster than [`MOVING_SPEED`], returns the limit's penalty to its
+/// least level.
+const MOVING_WINDOW_SPEED: f64 = 0.06;
+
+/// The limit's penalty is raised only while no spring is over the limit by more than this
+/// share of it: a spring far past it is one the solve cannot bring back (held by friction on a
+/// collision object), and a stiffer limit would only pull it harder.
+const RAISE_OVERSHOOT: f64 = 0.01;
+
+/// See [`MOVING_WINDOW_SPEED`], m/s.
+const MOVING_SPEED: f64 = 0.5;
+
+/// The stretch limit's weight at penalty `level`, as a multiple of [`limit_weight`].
+fn penalty_scale(level: u32) -> f64 {
+    PENALTY_GROWTH.powi(level as i32)
+}
 
 /// Local/global iterations per step of [`FastImplicit::new`], at most.
 pub const DEFAULT_ITERATIONS: u32 = 10;
@@ -138,6 +188,21 @@ pub struct FastImplicit {
     rhs: Vec<f64>,
     y: Vec<Vec3>,
     x: Vec<Vec3>,
+    /// The stretch limit's penalty level: its weight is [`limit_weight`] times
+    /// `PENALTY_GROWTH` to this power (see the module doc).
+    level: u32,
+    /// The free points' positions at the start of the current quiet window, and the time
+    /// since, s.
+    checkpoint: Vec<Vec3>,
+    since: f64,
+    /// Steps in the current window, and those that ran out of iterations before the tolerance.
+    steps: u32,
+    unconverged: u32,
+    /// The window speed, m/s, before the last raise of the level, until the window after it
+    /// has been measured.
+    raised_from: Option<f64>,
+    /// Whether a raise was undone, which holds the level until the cloth moves again.
+    held: bool,
     /// The colliders with their friction retimed to the step.
     colliders: Vec<Collider>,
     hash: SpatialHash,
@@ -156,6 +221,7 @@ struct MatrixKey {
     inertia: u64,
     stiffness: [u64; 3],
     limit: bool,
+    level: u32,
 }
 
 #[derive(Debug)]
@@ -193,6 +259,13 @@ impl FastImplicit {
             rhs: Vec::new(),
             y: Vec::new(),
             x: Vec::new(),
+            level: 0,
+            checkpoint: Vec::new(),
+            since: 0.0,
+            steps: 0,
+            unconverged: 0,
+            raised_from: None,
+            held: false,
             colliders: Vec::new(),
             hash: SpatialHash::default(),
         }
@@ -234,9 +307,87 @@ impl FastImplicit {
         let n = topo.free() as u64;
         let pattern = 8 * 2 * col_ptr.len() as u64 + 8 * row_idx.len() as u64;
         let values = 8 * row_idx.len() as u64;
-        // rhs (3 per free point), y and x (3 per point), the multipliers (3 per spring).
-        let scratch = 8 * (3 * n + 6 * mesh.len() as u64 + 3 * mesh.springs().len() as u64);
+        // rhs (3 per free point), y, x and the quiet window's checkpoint (3 per point each),
+        // the multipliers (3 per spring).
+        let scratch = 8 * (3 * n + 9 * mesh.len() as u64 + 3 * mesh.springs().len() as u64);
         topo.bytes() + pattern + values + factor.bytes() + scratch
+    }
+
+    /// Moves the stretch limit's penalty to `level`, rescaling the scaled multipliers so that
+    /// the tensions they stand for (penalty times multiplier) are kept.
+    fn set_level(&mut self, level: u32) {
+        if level != self.level {
+            let scale = penalty_scale(self.level) / penalty_scale(level);
+            for mu in &mut self.mu {
+                *mu *= scale;
+            }
+            self.level = level;
+        }
+    }
+
+    /// Returns the limit's penalty to its least level and starts watching the motion afresh.
+    fn release(&mut self) {
+        self.set_level(0);
+        self.checkpoint.clear();
+        self.raised_from = None;
+        self.held = false;
+    }
+
+    /// Measures the cloth's motion over [`QUIET_WINDOW`] and raises or drops the limit's
+    /// penalty level by it.
+    fn watch(&mut self, mesh: &ClothMesh, state: &ClothState, h: f64, converged: bool) {
+        if self.checkpoint.len() != mesh.len() {
+            self.checkpoint.clone_from(&state.positions);
+            self.since = 0.0;
+            self.unconverged = 0;
+            self.steps = 0;
+            return;
+        }
+        self.since += h;
+        self.steps += 1;
+        if !converged {
+            self.unconverged += 1;
+        }
+        if self.since < QUIET_WINDOW {
+            return;
+        }
+        let (mut sum, mut count) = (0.0, 0_usize);
+        for ((x, c), &pinned) in state
+            .positions
+            .iter()
+            .zip(&self.checkpoint)
+            .zip(mesh.pinned())
+        {
+            if !pinned {
+                sum += (x - c).norm_squared();
+                count += 1;
+            }
+        }
+        let speed = (sum / count.max(1) as f64).sqrt() / self.since;
+        if speed > MOVING_WINDOW_SPEED {
+            self.release();
+        } else if let Some(before) = self.raised_from.take() {
+            // NOTE: a stiffer limit settles a cloth whose springs can reach the limit; one that
+            // cannot (a spring held stretched by friction on a collision object) only fights
+            // it harder. A raise that left the cloth moving more than before is undone, and the
+            // level held until the cloth moves again.
+            if speed > before {
+                self.set_level(self.level.saturating_sub(1));
+                self.held = true;
+            }
+        } else if speed < QUIET_SPEED
+            && 2 * self.unconverged > self.steps
+            && !self.held
+            && self.level < MAX_PENALTY_LEVEL
+            && max_stretch_ratio(mesh, state) <= MAX_STRETCH * (1.0 + RAISE_OVERSHOOT)
+        {
+            self.set_level(self.level + 1);
+            self.raised_from = Some(speed);
+        }
+        self.checkpoint.clone_from(&state.positions);
+        self.since = 0.0;
+        self.unconverged = 0;
+        self.steps = 0;
     }
 
     /// Makes sure the topology, the symbolic factor and the numeric factor describe `mesh` and
@@ -278,6 +429,7 @@ impl FastImplicit {
             inertia: inertia.to_bits(),
             stiffness: KINDS.map(|k| params.stiffness(k).to_bits()),
             limit: params.stretch_limit,
+            level: self.level,
         };
         if sys.key == Some(key) {
             return Ok(());
@@ -290,7 +442,7 @@ impl FastImplicit {
             v[sys.col_ptr[f]] = inertia;
         }
         for (s, &slot) in mesh.springs().iter().zip(&topo.spring_slot) {
-            let k = spring_weight(params, s.kind, inertia);
+            let k = spring_weight(params, s.kind, inertia, self.level);
             if k == 0.0 {
                 continue;
             }
@@ -312,10 +464,10 @@ impl FastImplicit {
 
 /// The total weight a spring of `kind` puts into the matrix: its stiffness, plus the stretch
 /// limit's weight when the limit is on.
-fn spring_weight(params: &StepParams, kind: SpringKind, inertia: f64) -> f64 {
+fn spring_weight(params: &StepParams, kind: SpringKind, inertia: f64, level: u32) -> f64 {
     let k = params.stiffness(kind);
     if params.stretch_limit {
-        k + limit_weight(k, inertia)
+        k + limit_weight(k, inertia) * penalty_scale(level)
     } else {
         k
     }
@@ -348,6 +500,7 @@ impl Solver for FastImplicit {
 
     fn reset(&mut self) {
         self.mu.fill(Vec3::zeros());
+        self.release();
     }
 
     fn step(
@@ -366,6 +519,11 @@ impl Solver for FastImplicit {
             hold_still(mesh, colliders, params, state, &mut self.hash)?;
             return Ok(StepReport::default());
         }
+        if !params.stretch_limit
+            || (self.level > 0 && fastest_point(mesh, state) > MOVING_SPEED * h)
+        {
+            self.release();
+        }
         self.prepare(mesh, params, inertia)?;
         let max_iterations = self.iterations;
         let Some(sys) = self.system.as_mut() else {
@@ -379,7 +537,7 @@ impl Solver for FastImplicit {
         }
         let limits = KINDS.map(|kind| {
             if params.stretch_limit {
-                limit_weight(params.stiffness(kind), inertia)
+                limit_weight(params.stiffness(kind), inertia) * penalty_scale(self.level)
             } else {
                 0.0
             }
@@ -483,11 +641,26 @@ impl Solver for FastImplicit {
             &self.x,
             &mut self.hash,
         )?;
+        if params.stretch_limit {
+            self.watch(mesh, state, h, residual <= self.tolerance);
+        }
         Ok(StepReport {
             iterations,
             residual,
         })
     }
+}
+
+/// The largest distance, m, a free point moved over the last step (`positions - last`).
+fn fastest_point(mesh: &ClothMesh, state: &ClothState) -> f64 {
+    state
+        .positions
+        .iter()
+        .zip(&state.last)
+        .zip(mesh.pinned())
+        .filter(|(_, pinned)| !**pinned)
+        .map(|((x, l), _)| (x - l).norm())
+        .fold(0.0, f64::max)
 }
 
 /// The incremental potential `Phi` of the step without the stretch limit, J, up to a common
@@ -526,4 +699,29 @@ fn add_rhs(rhs: &mut [f64], n: usize, f: usize, g: &Vec3) {
     rhs[f] += g.x;
     rhs[n + f] += g.y;
     rhs[2 * n + f] += g.z;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_change_of_the_limit_penalty_keeps_the_limit_tensions() {
+        // The scaled multiplier is the tension over the penalty: raising the penalty a
+        // hundredfold must divide it by a hundred, or the limit's pull would jump.
+        let mut solver = FastImplicit::new();
+        solver.mu = vec![Vec3::new(0.3, -0.2, 0.1), Vec3::zeros()];
+        let before = solver.mu.clone();
+        solver.set_level(MAX_PENALTY_LEVEL);
+        let scale = penalty_scale(MAX_PENALTY_LEVEL);
+        for (b, a) in before.iter().zip(&solver.mu) {
+            assert!(
+                (b - a * scale).norm() <= 1e-15 * b.norm(),
+                "{b} against {a}"
+            );
+        }
+        solver.reset();
+        assert_eq!(solver.level, 0);
+        assert!(solver.mu.iter().all(|m| *m == Vec3::zeros()));
+    }
 }
