@@ -235,8 +235,9 @@ fn fast_implicit_settles_pinned4_at_one_and_five_steps_per_frame() {
 #[test]
 fn fast_implicit_settles_the_hammock_whose_width_hangs_at_the_stretch_limit() {
     // The hammock's 63 springs across its width all bind at rest: the long taut chain whose
-    // limit multipliers converge too slowly at the moving cloth's limit weight, and whose
-    // step velocity kept a jitter of about 5 cm/s. The settled bound is the matrices' own.
+    // limit multipliers converge too slowly at the moving cloth's limit weight, leaving a
+    // jitter in the step velocity unless the weight rises once the cloth is still (see the
+    // fast_implicit module doc). The settled bound is the matrices' own.
     let scene = load("hammock");
     let params = StepParams {
         steps_per_frame: 1,
