@@ -58,15 +58,23 @@
 //! of centimetres per second that the drag never removes. A stiffer weight converges the chain
 //! quickly but holds every slack spring to its last iterate, which on a moving cloth damps its
 //! deformation. The weight is therefore raised only once the cloth is still: the solver
-//! watches the free points' root-mean-square speed over windows of 0.25 s; a window below
+//! watches the free points' root-mean-square speed over windows of 0.25 s. A window below
 //! 2 cm/s in which most steps ran out of iterations before the tolerance (a cloth whose steps
-//! converge needs no raise), with no spring more than 1 % over the limit, raises the weight
-//! tenfold, at most
-//! twice (one refactorisation each), and the multipliers are rescaled so that the tensions they
-//! stand for are kept. A raise after which the next window moves faster than the one before it
-//! is undone and the level held. A window faster than 6 cm/s, a step that starts with a point
-//! faster than 0.5 m/s, the limit switched off or [`Solver::reset`] return the weight to its
-//! least value (the cache, like the multipliers, is the solver's own: a swap starts afresh).
+//! converge needs no raise), with no spring more than 1 % over the limit and no point
+//! touching a collision object (friction holds such a cloth's springs where the solve leaves
+//! them, and a stiffer limit would only fight the friction), raises the weight tenfold, at
+//! most three times (one refactorisation each); the multipliers are rescaled so that the
+//! tensions they stand for are kept. Each level is measured for two windows before it is
+//! raised again or judged: a raise after which the second window's jitter (the
+//! root-mean-square of the free points' step speeds, which sees the back-and-forth that a
+//! window's net displacement averages away) exceeds the jitter of the window before it is
+//! undone, and the level held until the cloth moves again. A window faster than 6 cm/s, a step
+//! that starts with a point faster than 0.5 m/s, the limit switched off or [`Solver::reset`]
+//! return the weight to its least value (the cache, like the multipliers, is the solver's own:
+//! a swap starts afresh). While a raise is being judged only the windows count: the raise
+//! itself moves a few points fast for a step or two as the tensions it converges
+//! redistribute; a window faster than 6 cm/s then returns the weight to its least value and
+//! holds it there until a later window moves again.
 //!
 //! NOTE: the multiplier is a vector fixed in space, not a length along the spring's current
 //! direction. A binding spring's tension is `w_s |u_s|`; where it exceeds `w_s 1.1 L_s` the
@@ -131,9 +139,9 @@ pub const FAST_TOLERANCE: f64 = 1e-7;
 /// The factor between successive levels of the stretch limit's penalty.
 const PENALTY_GROWTH: f64 = 10.0;
 
-/// The highest level of the stretch limit's penalty: at most `PENALTY_GROWTH^2` times
+/// The highest level of the stretch limit's penalty: at most `PENALTY_GROWTH^3` times
 /// [`limit_weight`].
-const MAX_PENALTY_LEVEL: u32 = 2;
+const MAX_PENALTY_LEVEL: u32 = 3;
 
 /// The span, s, over which the cloth's motion is measured to raise the limit's penalty.
 const QUIET_WINDOW: f64 = 0.25;
@@ -151,6 +159,16 @@ const MOVING_WINDOW_SPEED: f64 = 0.06;
 /// share of it: a spring far past it is one the solve cannot bring back (held by friction on a
 /// collision object), and a stiffer limit would only pull it harder.
 const RAISE_OVERSHOOT: f64 = 0.01;
+
+/// A free point this near a collision object's surface, m, touches it, and the limit's
+/// penalty is not raised: friction holds such a cloth's springs where the solve leaves them,
+/// so a stiffer limit fights the friction rather than converging a chain (see
+/// [`RAISE_OVERSHOOT`]). Ten times the course's surface offset: a point resting on a surface
+/// keeps within one offset of it, and the bundled scenes' springs are some 20 times longer.
+const CONTACT_DISTANCE: f64 = 1e-3;
+
+/// The windows measured at a level before it is judged (after a raise) or raised again.
+const JUDGED_AFTER: u32 = 2;
 
 /// See [`MOVING_WINDOW_SPEED`], m/s.
 const MOVING_SPEED: f64 = 0.5;
@@ -198,9 +216,13 @@ pub struct FastImplicit {
     /// Steps in the current window, and those that ran out of iterations before the tolerance.
     steps: u32,
     unconverged: u32,
-    /// The window speed, m/s, before the last raise of the level, until the window after it
-    /// has been measured.
+    /// The sum over the window's steps of the free points' mean squared step speed, m^2/s^2.
+    jitter: f64,
+    /// The jitter (root-mean-square step speed, m/s) of the window before the last raise of
+    /// the level, until the raise has been judged.
     raised_from: Option<f64>,
+    /// Windows measured since the level last changed.
+    windows_at_level: u32,
     /// Whether a raise was undone, which holds the level until the cloth moves again.
     held: bool,
     /// The colliders with their friction retimed to the step.
@@ -264,7 +286,9 @@ impl FastImplicit {
             since: 0.0,
             steps: 0,
             unconverged: 0,
+            jitter: 0.0,
             raised_from: None,
+            windows_at_level: 0,
             held: false,
             colliders: Vec::new(),
             hash: SpatialHash::default(),
@@ -322,25 +346,36 @@ impl FastImplicit {
                 *mu *= scale;
             }
             self.level = level;
+            self.windows_at_level = 0;
         }
     }
 
     /// Returns the limit's penalty to its least level and starts watching the motion afresh.
+    /// Motion that sets in while a raise is being judged counts against the raise: the level
+    /// is then held at its least.
     fn release(&mut self) {
         self.set_level(0);
         self.checkpoint.clear();
-        self.raised_from = None;
-        self.held = false;
+        self.held = self.raised_from.take().is_some();
+        self.windows_at_level = 0;
     }
 
     /// Measures the cloth's motion over [`QUIET_WINDOW`] and raises or drops the limit's
     /// penalty level by it.
-    fn watch(&mut self, mesh: &ClothMesh, state: &ClothState, h: f64, converged: bool) {
+    fn watch(
+        &mut self,
+        mesh: &ClothMesh,
+        colliders: &[Collider],
+        state: &ClothState,
+        h: f64,
+        converged: bool,
+    ) {
         if self.checkpoint.len() != mesh.len() {
             self.checkpoint.clone_from(&state.positions);
             self.since = 0.0;
             self.unconverged = 0;
             self.steps = 0;
+            self.jitter = 0.0;
             return;
         }
         self.since += h;
@@ -348,10 +383,18 @@ impl FastImplicit {
         if !converged {
             self.unconverged += 1;
         }
+        let (mut step_sum, mut count) = (0.0, 0_usize);
+        for ((x, l), &pinned) in state.positions.iter().zip(&state.last).zip(mesh.pinned()) {
+            if !pinned {
+                step_sum += (x - l).norm_squared();
+                count += 1;
+            }
+        }
+        self.jitter += step_sum / (count.max(1) as f64 * h * h);
         if self.since < QUIET_WINDOW {
             return;
         }
-        let (mut sum, mut count) = (0.0, 0_usize);
+        let mut sum = 0.0;
         for ((x, c), &pinned) in state
             .positions
             .iter()
@@ -360,34 +403,44 @@ impl FastImplicit {
         {
             if !pinned {
                 sum += (x - c).norm_squared();
-                count += 1;
             }
         }
         let speed = (sum / count.max(1) as f64).sqrt() / self.since;
+        let jitter = (self.jitter / f64::from(self.steps)).sqrt();
         if speed > MOVING_WINDOW_SPEED {
             self.release();
-        } else if let Some(before) = self.raised_from.take() {
-            // NOTE: a stiffer limit settles a cloth whose springs can reach the limit; one that
-            // cannot (a spring held stretched by friction on a collision object) only fights
-            // it harder. A raise that left the cloth moving more than before is undone, and the
-            // level held until the cloth moves again.
-            if speed > before {
-                self.set_level(self.level.saturating_sub(1));
-                self.held = true;
+        } else {
+            self.windows_at_level += 1;
+            if let Some(before) = self.raised_from {
+                // NOTE: a stiffer limit settles a cloth whose binding chain was converging too
+                // slowly, but one whose slack springs the stiffer weight holds back converges
+                // more slowly still. A raise is judged on the second window after it (the
+                // first still carries the change): if the cloth jitters more than before it,
+                // the raise is undone and the level held until the cloth moves again.
+                if self.windows_at_level >= JUDGED_AFTER {
+                    self.raised_from = None;
+                    if jitter > before {
+                        self.set_level(self.level.saturating_sub(1));
+                        self.held = true;
+                    }
+                }
+            } else if self.windows_at_level >= JUDGED_AFTER
+                && speed < QUIET_SPEED
+                && 2 * self.unconverged > self.steps
+                && !self.held
+                && self.level < MAX_PENALTY_LEVEL
+                && max_stretch_ratio(mesh, state) <= MAX_STRETCH * (1.0 + RAISE_OVERSHOOT)
+                && !touches(mesh, colliders, state)
+            {
+                self.set_level(self.level + 1);
+                self.raised_from = Some(jitter);
             }
-        } else if speed < QUIET_SPEED
-            && 2 * self.unconverged > self.steps
-            && !self.held
-            && self.level < MAX_PENALTY_LEVEL
-            && max_stretch_ratio(mesh, state) <= MAX_STRETCH * (1.0 + RAISE_OVERSHOOT)
-        {
-            self.set_level(self.level + 1);
-            self.raised_from = Some(speed);
         }
         self.checkpoint.clone_from(&state.positions);
         self.since = 0.0;
         self.unconverged = 0;
         self.steps = 0;
+        self.jitter = 0.0;
     }
 
     /// Makes sure the topology, the symbolic factor and the numeric factor describe `mesh` and
@@ -500,6 +553,7 @@ impl Solver for FastImplicit {
 
     fn reset(&mut self) {
         self.mu.fill(Vec3::zeros());
+        self.raised_from = None;
         self.release();
     }
 
@@ -519,8 +573,14 @@ impl Solver for FastImplicit {
             hold_still(mesh, colliders, params, state, &mut self.hash)?;
             return Ok(StepReport::default());
         }
-        if !params.stretch_limit
-            || (self.level > 0 && fastest_point(mesh, state) > MOVING_SPEED * h)
+        if !params.stretch_limit {
+            self.raised_from = None;
+            self.release();
+        } else if self.level > 0
+            // A raise under judgement moves a few points fast while the tensions it converges
+            // redistribute; only its window speaks against it.
+            && self.raised_from.is_none()
+            && fastest_point(mesh, state) > MOVING_SPEED * h
         {
             self.release();
         }
@@ -642,13 +702,28 @@ impl Solver for FastImplicit {
             &mut self.hash,
         )?;
         if params.stretch_limit {
-            self.watch(mesh, state, h, residual <= self.tolerance);
+            self.watch(mesh, colliders, state, h, residual <= self.tolerance);
         }
         Ok(StepReport {
             iterations,
             residual,
         })
     }
+}
+
+/// Whether a free point lies within [`CONTACT_DISTANCE`] of a collision object's surface.
+fn touches(mesh: &ClothMesh, colliders: &[Collider], state: &ClothState) -> bool {
+    let near = |p: &Vec3| {
+        colliders.iter().any(|c| match c {
+            Collider::Sphere(s) => (p - s.origin).norm() <= s.radius + CONTACT_DISTANCE,
+            Collider::Plane(pl) => (p - pl.point).dot(&pl.normal).abs() <= CONTACT_DISTANCE,
+        })
+    };
+    state
+        .positions
+        .iter()
+        .zip(mesh.pinned())
+        .any(|(p, &pinned)| !pinned && near(p))
 }
 
 /// The largest distance, m, a free point moved over the last step (`positions - last`).
