@@ -57,24 +57,25 @@
 //! move, slower than the iterations of a step can follow, and the step velocity keeps a jitter
 //! of centimetres per second that the drag never removes. A stiffer weight converges the chain
 //! quickly but holds every slack spring to its last iterate, which on a moving cloth damps its
-//! deformation. The weight is therefore raised only once the cloth is still: the solver
-//! watches the free points' root-mean-square speed over windows of 0.25 s. A window below
-//! 2 cm/s in which most steps ran out of iterations before the tolerance (a cloth whose steps
-//! converge needs no raise), with no spring more than 1 % over the limit and no point
-//! touching a collision object (friction holds such a cloth's springs where the solve leaves
-//! them, and a stiffer limit would only fight the friction), raises the weight tenfold, at
-//! most three times (one refactorisation each); the multipliers are rescaled so that the
-//! tensions they stand for are kept. Each level is measured for two windows before it is
-//! raised again or judged: a raise after which the second window's jitter (the
-//! root-mean-square of the free points' step speeds, which sees the back-and-forth that a
-//! window's net displacement averages away) exceeds the jitter of the window before it is
-//! undone, and the level held until the cloth moves again. A window faster than 6 cm/s, a step
-//! that starts with a point faster than 0.5 m/s, the limit switched off or [`Solver::reset`]
-//! return the weight to its least value (the cache, like the multipliers, is the solver's own:
-//! a swap starts afresh). While a raise is being judged only the windows count: the raise
-//! itself moves a few points fast for a step or two as the tensions it converges
-//! redistribute; a window faster than 6 cm/s then returns the weight to its least value and
-//! holds it there until a later window moves again.
+//! deformation. The weight is therefore raised only once the cloth is still: the solver watches the
+//! free points' root-mean-square speed over windows of 0.25 s, and their jitter (the
+//! root-mean-square of their step speeds, which sees the back-and-forth that a window's net
+//! displacement averages away). A window below 2 cm/s in which most steps ran out of iterations
+//! before the tolerance (a cloth whose steps converge needs no raise) and whose jitter has stalled
+//! (above 1 mm/s and above 0.6 of the window's before: a jitter that falls faster settles at the
+//! weight it has, where the slack springs converge freely), with no spring more than 1 % over the
+//! limit and no point touching a collision object (friction holds such a cloth's springs where the
+//! solve leaves them, and a stiffer limit would only fight the friction), raises the weight
+//! tenfold, at most three times (one refactorisation each); the multipliers are rescaled so that
+//! the tensions they stand for are kept. Each level is measured for two windows before it is raised
+//! again or judged: a raise after which the second window's jitter exceeds the jitter of the window
+//! before it is undone, and the level held until the cloth moves again. A window faster than 6
+//! cm/s, a step that starts with a point faster than 0.5 m/s, the limit switched off or
+//! [`Solver::reset`] return the weight to its least value (the cache, like the multipliers, is the
+//! solver's own: a swap starts afresh). While a raise is being judged only the windows count: the
+//! raise itself moves a few points fast for a step or two as the tensions it converges
+//! redistribute; a window faster than 6 cm/s then returns the weight to its least value and holds
+//! it there until a later window moves again.
 //!
 //! NOTE: the multiplier is a vector fixed in space, not a length along the spring's current
 //! direction. A binding spring's tension is `w_s |u_s|`; where it exceeds `w_s 1.1 L_s` the
@@ -167,6 +168,18 @@ const RAISE_OVERSHOOT: f64 = 0.01;
 /// keeps within one offset of it, and the bundled scenes' springs are some 20 times longer.
 const CONTACT_DISTANCE: f64 = 1e-3;
 
+/// A window whose jitter (root-mean-square step speed) stays above this share of the window's
+/// before has stalled: converging at that rate, a jitter of centimetres per second would
+/// still be millimetres per second seconds later. Only a stalled window raises the limit's
+/// penalty; a cloth whose jitter falls faster settles at the weight it has, where its slack
+/// springs converge freely.
+const STALL_RATIO: f64 = 0.6;
+
+/// Nor does a window whose jitter is below this, m/s, a tenth of the speed a settled cloth
+/// may keep: it is at rest for every purpose, and a stiffer weight would only slow its slack
+/// springs' convergence.
+const STALLED_JITTER: f64 = 1e-3;
+
 /// The windows measured at a level before it is judged (after a raise) or raised again.
 const JUDGED_AFTER: u32 = 2;
 
@@ -218,6 +231,8 @@ pub struct FastImplicit {
     unconverged: u32,
     /// The sum over the window's steps of the free points' mean squared step speed, m^2/s^2.
     jitter: f64,
+    /// The jitter (root-mean-square step speed, m/s) of the last window measured.
+    last_jitter: f64,
     /// The jitter (root-mean-square step speed, m/s) of the window before the last raise of
     /// the level, until the raise has been judged.
     raised_from: Option<f64>,
@@ -287,6 +302,7 @@ impl FastImplicit {
             steps: 0,
             unconverged: 0,
             jitter: 0.0,
+            last_jitter: f64::INFINITY,
             raised_from: None,
             windows_at_level: 0,
             held: false,
@@ -426,6 +442,8 @@ impl FastImplicit {
                 }
             } else if self.windows_at_level >= JUDGED_AFTER
                 && speed < QUIET_SPEED
+                && jitter >= STALLED_JITTER
+                && jitter > STALL_RATIO * self.last_jitter
                 && 2 * self.unconverged > self.steps
                 && !self.held
                 && self.level < MAX_PENALTY_LEVEL
@@ -441,6 +459,7 @@ impl FastImplicit {
         self.unconverged = 0;
         self.steps = 0;
         self.jitter = 0.0;
+        self.last_jitter = jitter;
     }
 
     /// Makes sure the topology, the symbolic factor and the numeric factor describe `mesh` and
