@@ -1,7 +1,8 @@
 //! The implicit solvers' frame times as ratios to Verlet's, timed in turn in one run.
 //!
 //! `cargo run -p cloth-implicit --release --example ratios -- [GRID] [FRAMES] [--only SOLVER]
-//! [--group default|stiff]` (defaults 50 and 450, every solver and both groups): the course's `pinned4` scaled to GRID x GRID points (thickness scaled with the spacing),
+//! [--group default|stiff] [--limit off]` (defaults 50 and 450, every solver and both groups,
+//! the stretch limit on): the course's `pinned4` scaled to GRID x GRID points (thickness scaled with the spacing),
 //! self-collision on, from the flat start. Each configuration advances its own cloth; every
 //! round times one frame of each, so a machine whose speed drifts slows all of them alike. The
 //! mean over all frames (the fall, the swing and the rest) is what a user waits for.
@@ -9,7 +10,9 @@
 //! Configurations: Verlet at 30 steps per frame (the reference), fast-implicit and implicit at
 //! one step per frame; then at ks = 1e6, Verlet at 200 steps per frame (the fewest that keep
 //! it stable there on the 50 x 50 cloth) against fast-implicit and implicit at one. `--only`
-//! (repeatable) keeps the named implicit solvers' rows and Verlet's; `--group` keeps one group.
+//! (repeatable) keeps the named implicit solvers' rows and Verlet's; `--group` keeps one group;
+//! `--limit off` runs every configuration without the stretch limit, which measures what the
+//! implicit solvers cost without it.
 
 use std::time::Instant;
 
@@ -43,9 +46,11 @@ fn group(
     ks: f64,
     verlet_steps: u32,
     only: &[String],
+    stretch_limit: bool,
 ) -> Vec<Config> {
     let base = StepParams {
         ks,
+        stretch_limit,
         ..StepParams::default()
     };
     let configs: [(String, Box<dyn Solver>, u32); 3] = [
@@ -96,11 +101,13 @@ fn main() {
     let mut positional = Vec::new();
     let mut only = Vec::new();
     let mut groups = Vec::new();
+    let mut stretch_limit = true;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
             "--only" => only.extend(args.next()),
             "--group" => groups.extend(args.next()),
+            "--limit" => stretch_limit = args.next().as_deref() != Some("off"),
             _ => positional.push(a),
         }
     }
@@ -117,9 +124,12 @@ fn main() {
         if !groups.is_empty() && !groups.iter().any(|g| g == group_name) {
             continue;
         }
-        let runs = group(&mesh, frames, ks, verlet_steps, &only);
+        let runs = group(&mesh, frames, ks, verlet_steps, &only, stretch_limit);
         let reference = runs[0].seconds;
-        println!("{n} x {n}, ks = {ks}, self-collision on, {frames} frames from the flat start:");
+        let limit = if stretch_limit { "on" } else { "off" };
+        println!(
+            "{n} x {n}, ks = {ks}, self-collision on, stretch limit {limit}, {frames} frames from the flat start:"
+        );
         for c in &runs {
             let ms = 1e3 * c.seconds / frames as f64;
             let stretch = max_stretch_ratio(&mesh, &c.state);
