@@ -162,7 +162,7 @@ fn stable_verlet_steps(scene: &Scene, ks: f64) -> u32 {
 /// the drape over the sphere with the limit off).
 ///
 /// Why the last second and not its last frame: such motion comes in bursts, a fold or an edge
-/// slipping at once and stopping again (the model's drape over the sphere moves at 0.6-1.4
+/// slipping at once and stopping again (the model's drape over the sphere moves at 0.2-1.1
 /// cm/s by turns between 3 s and 8 s, selfCollision at 0.7-4.2 cm/s), and which burst falls on
 /// the last frame depends on the integrator's rounding as much as on its physics. A case that
 /// moves no faster than the model does at some moment of the second before has come to rest
