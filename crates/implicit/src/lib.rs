@@ -40,5 +40,5 @@ pub use implicit_euler::{
     ImplicitEuler, LIMIT_TOLERANCE, MAX_LIMIT_UPDATES, MAX_NEWTON_ITERATIONS, MAX_PCG_ITERATIONS,
     NEWTON_TOLERANCE, REFACTOR_BUDGET,
 };
-pub use retime::retime_velocity;
+pub use retime::{retime_friction, retime_velocity};
 pub use spring_energy::{LIMIT_OVERSHOOT, limiter_stiffness};

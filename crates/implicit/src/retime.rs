@@ -31,11 +31,7 @@ pub fn retime_velocity(state: &mut ClothState, old_dt: f64, new_dt: f64) {
 /// applies it thirty times, and a cloth that Verlet holds on a sphere slides off it. The same
 /// reading of a per-step constant as a rate turns the course's damping into
 /// [`StepParams::drag_rate`].
-pub(crate) fn retime_friction(
-    colliders: &[Collider],
-    params: &StepParams,
-    out: &mut Vec<Collider>,
-) {
+pub fn retime_friction(colliders: &[Collider], params: &StepParams, out: &mut Vec<Collider>) {
     out.clear();
     out.extend_from_slice(colliders);
     let h_ref = 1.0 / (params.frames_per_sec * f64::from(REFERENCE_STEPS_PER_FRAME));

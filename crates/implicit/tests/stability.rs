@@ -8,8 +8,8 @@
 
 mod common;
 
-use cloth_implicit::{FastImplicit, ImplicitEuler, retime_velocity};
-use cloth_mesh::{ClothState, REFERENCE_STEPS_PER_FRAME};
+use cloth_implicit::{FastImplicit, ImplicitEuler, retime_friction, retime_velocity};
+use cloth_mesh::ClothState;
 use cloth_scene::{BUNDLED, Scene};
 use cloth_solver::{Solver, StepParams, Verlet, advance_frame, kinetic_energy};
 use std::sync::Mutex;
@@ -144,7 +144,7 @@ fn stable_verlet_steps(scene: &Scene, ks: f64) -> u32 {
 /// [`SETTLED_RMS_SPEED`], or the fastest the course's own method still moves during the last
 /// second of [`SETTLE_SECONDS`], measured the same way, where that is higher. The method is
 /// Verlet with the same switches at the scene's steps per frame, or at the fewest that keep it
-/// stable at `params.ks` ([`stable_verlet_steps`]); at more steps than the course's 30 its
+/// stable at `params.ks` ([`stable_verlet_steps`]); at more steps than the scene's own its
 /// per-step damping and friction are retimed to keep their rates (`1 - (1 - f)^(30 / steps)`
 /// each), as the implicit solvers retime them, so the reference is the same physical cloth: with
 /// the course's per-step damping applied 200 times a frame, a cloth at 1e6 N/m falls at 27 cm/s
@@ -169,17 +169,16 @@ fn stable_verlet_steps(scene: &Scene, ks: f64) -> u32 {
 /// as far as the model has.
 /// Where the reference stays below [`SETTLED_RMS_SPEED`] the absolute bound holds.
 fn reference_speed(scene: &Scene, params: &StepParams) -> f64 {
-    let steps = stable_verlet_steps(scene, params.ks);
-    let keep = f64::from(REFERENCE_STEPS_PER_FRAME) / f64::from(steps);
-    let retime = |per_step: f64| 1.0 - (1.0 - per_step).powf(keep);
-    let reference = StepParams {
-        steps_per_frame: steps,
-        damping: 100.0 * retime(params.damping / 100.0),
+    let mut reference = StepParams {
+        steps_per_frame: stable_verlet_steps(scene, params.ks),
         ..*params
     };
     let mut scene = scene.clone();
-    for c in &mut scene.colliders {
-        c.set_friction(retime(c.friction()));
+    if reference.steps_per_frame != scene.params.steps_per_frame {
+        // The per-step damping that keeps the drag rate at the new step: `1 - e^(-c h)`.
+        reference.damping = 100.0 * -(-params.drag_rate() * reference.dt()).exp_m1();
+        let colliders = std::mem::take(&mut scene.colliders);
+        retime_friction(&colliders, &reference, &mut scene.colliders);
     }
     let speeds = speeds(&scene, &mut Verlet::new(), &reference, REFERENCE_SPAN)
         .unwrap_or_else(|e| panic!("the Verlet reference: {e}"));
