@@ -2,10 +2,10 @@
 //!
 //! `cargo run -p cloth-implicit --release --example ratios -- [GRID] [FRAMES] [--only SOLVER]
 //! [--group default|stiff] [--limit off]` (defaults 50 and 450, every solver and both groups,
-//! the stretch limit on): the course's `pinned4` scaled to GRID x GRID points (thickness scaled with the spacing),
-//! self-collision on, from the flat start. Each configuration advances its own cloth; every
-//! round times one frame of each, so a machine whose speed drifts slows all of them alike. The
-//! mean over all frames (the fall, the swing and the rest) is what a user waits for.
+//! the stretch limit on): the course's `pinned4` scaled to GRID x GRID points (thickness
+//! scaled with the spacing), self-collision on, from the flat start. Each configuration
+//! advances its own cloth; every round times one frame of each, so a machine whose speed
+//! drifts slows all of them alike. The mean over all frames (the fall, the swing and the rest) is what a user waits for.
 //!
 //! Configurations: Verlet at 30 steps per frame (the reference), fast-implicit and implicit at
 //! one step per frame; then at ks = 1e6, Verlet at 200 steps per frame (the fewest that keep
@@ -128,7 +128,8 @@ fn main() {
         let reference = runs[0].seconds;
         let limit = if stretch_limit { "on" } else { "off" };
         println!(
-            "{n} x {n}, ks = {ks}, self-collision on, stretch limit {limit}, {frames} frames from the flat start:"
+            "{n} x {n}, ks = {ks}, self-collision on, stretch limit {limit}, \
+             {frames} frames from the flat start:"
         );
         for c in &runs {
             let ms = 1e3 * c.seconds / frames as f64;

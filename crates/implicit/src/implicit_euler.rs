@@ -68,8 +68,8 @@
 //!    `lambda <- max(0, a + rho g)` (fixed point: `lambda = k_lim max(0, g)`, the stiff
 //!    spring's tension);
 //! 4. stops once no spring is over `1.1 L` by more than [`LIMIT_TOLERANCE`] of its rest
-//!    length over the steps per frame, or `rho = k_lim` (the solve was then of the stiff spring), or after
-//!    [`MAX_LIMIT_UPDATES`] updates; otherwise multiplies `rho` by 10 (at most `k_lim`) when
+//!    length over the steps per frame, or `rho = k_lim` (the solve was then of the stiff
+//!    spring), or after [`MAX_LIMIT_UPDATES`] updates; otherwise multiplies `rho` by 10 (at most `k_lim`) when
 //!    the largest overshoot has not fallen to a quarter of the last one (Bertsekas' rule), and
 //!    goes back to 2 from the current positions.
 //!
@@ -154,15 +154,16 @@ pub const MAX_LIMIT_UPDATES: u32 = 12;
 
 /// A step updates the stretch limit's multipliers and solves again while a spring is over
 /// `1.1 rest` by more than this fraction of its rest length, divided by the steps per frame:
-/// 0.1 % at one step per frame, a hundredth of the limit's own 10 %. Divided, because a spring
-/// that each step leaves anywhere within the tolerance moves its ends by up to that much from
-/// one step to the next: 20 um on a 2 cm spring, a jitter of 1.8 mm/s at one step per frame
-/// that would be 1.8 cm/s at ten, the speed of a cloth that counts as moving; over the steps
-/// per frame it stays 1.8 mm/s at any step (as [`NEWTON_TOLERANCE`] does). A looser tolerance lets every spring of a falling cloth's hanging column give a
-/// little, and the cloth then drops farther and gathers more kinetic energy than the course's
-/// model gives it (the swap test in `tests/stability.rs` bounds that energy by Verlet's; the
-/// tolerances tried against it are in docs/performance.md). Once the cloth rests (no point
-/// faster than 1 mm/s) the penalty grows to the stiff limit's, which holds every spring within
+/// 0.1 % at one step per frame, a hundredth of the limit's own 10 %. Divided, because a spring that
+/// each step leaves anywhere within the tolerance moves its ends by up to that much from one
+/// step to the next: 20 um on a 2 cm spring, a jitter of 1.8 mm/s at one step per frame that
+/// would be 1.8 cm/s at ten, the speed of a cloth that counts as moving; over the steps per
+/// frame it stays 1.8 mm/s at any step (as [`NEWTON_TOLERANCE`] does). A looser tolerance lets
+/// every spring of a falling cloth's hanging column give a little, and the cloth then drops
+/// farther and gathers more kinetic energy than the course's model gives it (the swap test in
+/// `tests/stability.rs` bounds that energy by Verlet's; the tolerances tried against it are in
+/// docs/performance.md). Once the cloth rests (no point faster than 1 mm/s) the penalty grows
+/// to the stiff limit's, which holds every spring within
 /// [`LIMIT_OVERSHOOT`](crate::LIMIT_OVERSHOOT) of the limit.
 pub const LIMIT_TOLERANCE: f64 = 0.001;
 
