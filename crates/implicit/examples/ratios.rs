@@ -5,7 +5,8 @@
 //! the stretch limit on): the course's `pinned4` scaled to GRID x GRID points (thickness
 //! scaled with the spacing), self-collision on, from the flat start. Each configuration
 //! advances its own cloth; every round times one frame of each, so a machine whose speed
-//! drifts slows all of them alike. The mean over all frames (the fall, the swing and the rest) is what a user waits for.
+//! drifts slows all of them alike. The mean over all frames (the fall, the swing and the rest)
+//! is what a user waits for.
 //!
 //! Configurations: Verlet at 30 steps per frame (the reference), fast-implicit and implicit at
 //! one step per frame; then at ks = 1e6, Verlet at 200 steps per frame (the fewest that keep

@@ -69,9 +69,9 @@
 //!    spring's tension);
 //! 4. stops once no spring is over `1.1 L` by more than [`LIMIT_TOLERANCE`] of its rest
 //!    length over the steps per frame, or `rho = k_lim` (the solve was then of the stiff
-//!    spring), or after [`MAX_LIMIT_UPDATES`] updates; otherwise multiplies `rho` by 10 (at most `k_lim`) when
-//!    the largest overshoot has not fallen to a quarter of the last one (Bertsekas' rule), and
-//!    goes back to 2 from the current positions.
+//!    spring), or after [`MAX_LIMIT_UPDATES`] updates; otherwise multiplies `rho` by 10 (at
+//!    most `k_lim`) when the largest overshoot has not fallen to a quarter of the last one
+//!    (Bertsekas' rule), and goes back to 2 from the current positions.
 //!
 //! Across steps the penalty starts at its least value, except that a step that starts with a spring
 //! more than [`LIMIT_TOLERANCE`] past the limit (as the course's sweep, a swap from Verlet or an
