@@ -7,17 +7,19 @@ use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Par, Side, Spec};
 
 use crate::memory::{Allocation, check_available, try_filled};
 
 /// The outcome of [`Cholesky::analyse`]: the symbolic factor and the workspace it needs.
-pub(crate) struct Analysis {
+pub(crate) struct Analysis<T> {
     symbolic: SymbolicCholesky<usize>,
     scratch: StackReq,
+    precision: std::marker::PhantomData<T>,
 }
 
-impl Analysis {
+impl<T> Analysis<T> {
     /// Entries of the factor `L`.
     pub(crate) fn factor_len(&self) -> usize {
         self.symbolic.len_val()
@@ -26,12 +28,57 @@ impl Analysis {
     /// Bytes the numeric factor and its workspace take: its values plus the workspace (the
     /// symbolic factor itself is already allocated).
     pub(crate) fn bytes(&self) -> u64 {
-        8 * self.factor_len() as u64 + self.scratch.unaligned_bytes_required() as u64
+        (size_of::<T>() * self.factor_len() + self.scratch.unaligned_bytes_required()) as u64
+    }
+}
+
+/// The floating-point type a [`Cholesky`] factor is stored and computed in.
+pub(crate) trait Precision: ComplexField + Copy + Default {
+    /// `v` rounded to this precision.
+    fn narrow_one(v: f64) -> Self::Real;
+    /// `values` in this precision: `values` itself for `f64`, else a rounded copy in `buf`.
+    fn narrow<'a>(values: &'a [f64], buf: &'a mut Vec<Self>) -> &'a [Self];
+    /// Runs `f` on `rhs` in this precision and writes its result back (in place for `f64`,
+    /// through `buf` otherwise).
+    fn in_place(rhs: &mut [f64], buf: &mut Vec<Self>, f: impl FnOnce(&mut [Self]));
+}
+
+impl Precision for f64 {
+    fn narrow_one(v: f64) -> Self {
+        v
+    }
+    fn narrow<'a>(values: &'a [f64], _: &'a mut Vec<Self>) -> &'a [Self] {
+        values
+    }
+    fn in_place(rhs: &mut [f64], _: &mut Vec<Self>, f: impl FnOnce(&mut [Self])) {
+        f(rhs);
+    }
+}
+
+impl Precision for f32 {
+    #[allow(clippy::cast_possible_truncation)]
+    fn narrow_one(v: f64) -> Self {
+        v as f32
+    }
+    #[allow(clippy::cast_possible_truncation)]
+    fn narrow<'a>(values: &'a [f64], buf: &'a mut Vec<Self>) -> &'a [Self] {
+        buf.clear();
+        buf.extend(values.iter().map(|&v| v as f32));
+        buf
+    }
+    fn in_place(rhs: &mut [f64], buf: &mut Vec<Self>, f: impl FnOnce(&mut [Self])) {
+        Self::narrow(rhs, buf);
+        f(buf);
+        for (r, &b) in rhs.iter_mut().zip(buf.iter()) {
+            *r = f64::from(b);
+        }
     }
 }
 
 /// A symmetric positive-definite matrix with a fixed lower-triangular pattern and its Cholesky
-/// factor.
+/// factor, computed and stored in precision `T` from `f64` values (`f32` halves the memory the
+/// factorisation and the triangular solves stream through, for a factor used only as a
+/// preconditioner).
 ///
 /// The fill-reducing ordering (AMD) and the symbolic factor are computed in [`Cholesky::new`];
 /// [`Cholesky::factorize`] then only redoes the numeric factor, which is what a Newton iteration
@@ -40,18 +87,20 @@ impl Analysis {
 /// NOTE: everything runs with [`Par::Seq`]: results must be bit-identical from run to run and
 /// the machine's cores are better spent elsewhere (the TUI, other cloths) than on a
 /// 10^4-unknown factorisation.
-pub(crate) struct Cholesky {
+pub(crate) struct Cholesky<T: Precision = f64> {
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
     symbolic: SymbolicCholesky<usize>,
-    l_values: Vec<f64>,
+    l_values: Vec<T>,
+    /// The matrix's values, then the right-hand sides, rounded to `T` (unused for `f64`).
+    rounded: Vec<T>,
     factored: bool,
     scratch: MemBuffer,
     /// Right-hand sides the scratch was sized for.
     rhs_cols: usize,
 }
 
-impl std::fmt::Debug for Cholesky {
+impl<T: Precision> std::fmt::Debug for Cholesky<T> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Cholesky")
             .field("n", &self.n())
@@ -62,7 +111,7 @@ impl std::fmt::Debug for Cholesky {
     }
 }
 
-impl Cholesky {
+impl<T: Precision> Cholesky<T> {
     /// Analyses the pattern of an `n x n` matrix given by its lower triangle in compressed
     /// columns (`col_ptr` of length `n + 1`, sorted `row_idx` with every row `>=` its column),
     /// for solves with up to `rhs_cols` right-hand sides at once, and allocates the factor.
@@ -76,8 +125,12 @@ impl Cholesky {
     ) -> Result<Self, String> {
         let analysis = Self::analyse(&col_ptr, &row_idx, rhs_cols)?;
         check_available(analysis.bytes(), "the Cholesky factor").map_err(|e| e.to_string())?;
-        let l_values = try_filled(analysis.symbolic.len_val(), 0.0, "the Cholesky factor")
-            .map_err(|e| e.to_string())?;
+        let l_values = try_filled(
+            analysis.symbolic.len_val(),
+            T::default(),
+            "the Cholesky factor",
+        )
+        .map_err(|e| e.to_string())?;
         let scratch = MemBuffer::try_new(analysis.scratch).map_err(|_| {
             Allocation {
                 what: "the Cholesky workspace",
@@ -90,6 +143,7 @@ impl Cholesky {
             row_idx,
             symbolic: analysis.symbolic,
             l_values,
+            rounded: Vec::new(),
             factored: false,
             scratch,
             rhs_cols,
@@ -105,7 +159,7 @@ impl Cholesky {
         col_ptr: &[usize],
         row_idx: &[usize],
         rhs_cols: usize,
-    ) -> Result<Analysis, String> {
+    ) -> Result<Analysis<T>, String> {
         let n = col_ptr.len() - 1;
         let pattern = SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
         let symbolic = factorize_symbolic_cholesky(
@@ -115,11 +169,12 @@ impl Cholesky {
             CholeskySymbolicParams::default(),
         )
         .map_err(|e| format!("symbolic Cholesky analysis failed: {e:?}"))?;
-        let factor_req = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Spec::default());
-        let solve_req = symbolic.solve_in_place_scratch::<f64>(rhs_cols, Par::Seq);
+        let factor_req = symbolic.factorize_numeric_llt_scratch::<T>(Par::Seq, Spec::default());
+        let solve_req = symbolic.solve_in_place_scratch::<T>(rhs_cols, Par::Seq);
         Ok(Analysis {
             symbolic,
             scratch: StackReq::any_of(&[factor_req, solve_req]),
+            precision: std::marker::PhantomData,
         })
     }
 
@@ -136,20 +191,33 @@ impl Cholesky {
     /// Numerically factors the matrix whose lower-triangle entries are `values` (in the
     /// pattern's order).
     ///
+    /// `least_pivot`, when positive, is a lower bound on the matrix's least eigenvalue, which
+    /// bounds every pivot of an exact factorisation from below: a pivot that rounding takes
+    /// under half of it is replaced by `least_pivot`, so that a factor computed in a low
+    /// precision stays that of a positive-definite matrix close to this one (which is all a
+    /// preconditioner needs) instead of failing.
+    ///
     /// # Errors
     /// A message when the matrix is not numerically positive definite.
-    pub(crate) fn factorize(&mut self, values: &[f64]) -> Result<(), String> {
+    pub(crate) fn factorize(&mut self, values: &[f64], least_pivot: f64) -> Result<(), String> {
         self.factored = false;
         let n = self.n();
         let pattern =
             SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
-        let a = SparseColMatRef::new(pattern, values);
+        let a = SparseColMatRef::new(pattern, T::narrow(values, &mut self.rounded));
         self.symbolic
-            .factorize_numeric_llt::<f64>(
+            .factorize_numeric_llt::<T>(
                 &mut self.l_values,
                 a,
                 Side::Lower,
-                LltRegularization::default(),
+                if least_pivot > 0.0 {
+                    LltRegularization {
+                        dynamic_regularization_delta: T::narrow_one(least_pivot),
+                        dynamic_regularization_epsilon: T::narrow_one(0.5 * least_pivot),
+                    }
+                } else {
+                    LltRegularization::default()
+                },
                 Par::Seq,
                 MemStack::new(&mut self.scratch),
                 Spec::default(),
@@ -180,14 +248,88 @@ impl Cholesky {
                 self.rhs_cols
             ));
         }
-        let rhs = MatMut::from_column_major_slice_mut(rhs, n, cols);
-        LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
-            Conj::No,
-            rhs,
-            Par::Seq,
-            MemStack::new(&mut self.scratch),
-        );
+        let (symbolic, l_values, scratch) = (&self.symbolic, &self.l_values, &mut self.scratch);
+        T::in_place(rhs, &mut self.rounded, |rhs| {
+            let rhs = MatMut::from_column_major_slice_mut(rhs, n, cols);
+            LltRef::new(symbolic, l_values).solve_in_place_with_conj(
+                Conj::No,
+                rhs,
+                Par::Seq,
+                MemStack::new(scratch),
+            );
+        });
         Ok(())
+    }
+}
+
+/// A [`Cholesky`] factor in single or double precision, chosen when it is built.
+pub(crate) enum AnyCholesky {
+    /// Stored and computed in `f32`.
+    Single(Cholesky<f32>),
+    /// Stored and computed in `f64`.
+    Double(Cholesky<f64>),
+}
+
+impl std::fmt::Debug for AnyCholesky {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Single(c) => f.debug_tuple("Single").field(c).finish(),
+            Self::Double(c) => f.debug_tuple("Double").field(c).finish(),
+        }
+    }
+}
+
+impl AnyCholesky {
+    /// [`Cholesky::new`] in single precision when `single`, else in double.
+    ///
+    /// # Errors
+    /// As [`Cholesky::new`].
+    pub(crate) fn new(
+        col_ptr: Vec<usize>,
+        row_idx: Vec<usize>,
+        rhs_cols: usize,
+        single: bool,
+    ) -> Result<Self, String> {
+        Ok(if single {
+            Self::Single(Cholesky::new(col_ptr, row_idx, rhs_cols)?)
+        } else {
+            Self::Double(Cholesky::new(col_ptr, row_idx, rhs_cols)?)
+        })
+    }
+
+    /// Whether the factor is kept in single precision.
+    pub(crate) fn is_single(&self) -> bool {
+        matches!(self, Self::Single(_))
+    }
+
+    /// See [`Cholesky::nnz`].
+    pub(crate) fn nnz(&self) -> usize {
+        match self {
+            Self::Single(c) => c.nnz(),
+            Self::Double(c) => c.nnz(),
+        }
+    }
+
+    /// See [`Cholesky::factorize`].
+    ///
+    /// # Errors
+    /// As [`Cholesky::factorize`].
+    pub(crate) fn factorize(&mut self, values: &[f64], least_pivot: f64) -> Result<(), String> {
+        match self {
+            Self::Single(c) => c.factorize(values, least_pivot),
+            Self::Double(c) => c.factorize(values, least_pivot),
+        }
+    }
+
+    /// See [`Cholesky::solve_in_place`].
+    ///
+    /// # Errors
+    /// As [`Cholesky::solve_in_place`].
+    pub(crate) fn solve_in_place(&mut self, rhs: &mut [f64]) -> Result<(), String> {
+        match self {
+            Self::Single(c) => c.solve_in_place(rhs),
+            Self::Double(c) => c.solve_in_place(rhs),
+        }
     }
 }
 
@@ -198,8 +340,8 @@ mod tests {
     #[test]
     fn solves_a_small_spd_system_exactly() {
         // [[4, 1, 0], [1, 3, 1], [0, 1, 2]] x = [1, 2, 3]; lower triangle by columns.
-        let mut c = Cholesky::new(vec![0, 2, 4, 5], vec![0, 1, 1, 2, 2], 1).unwrap();
-        c.factorize(&[4.0, 1.0, 3.0, 1.0, 2.0]).unwrap();
+        let mut c = Cholesky::<f64>::new(vec![0, 2, 4, 5], vec![0, 1, 1, 2, 2], 1).unwrap();
+        c.factorize(&[4.0, 1.0, 3.0, 1.0, 2.0], 0.0).unwrap();
         let mut x = vec![1.0, 2.0, 3.0];
         c.solve_in_place(&mut x).unwrap();
         let a = [[4.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 2.0]];
@@ -211,9 +353,45 @@ mod tests {
     }
 
     #[test]
+    fn a_single_precision_factor_solves_to_single_precision() {
+        // The same system as above: a condition number under 10, so the f32 factor's solution
+        // is within a few f32 roundings (6e-8 relative each) of the exact one; 1e-5 leaves a
+        // factor of a hundred over that and still fails on any wrong value.
+        let mut c = Cholesky::<f32>::new(vec![0, 2, 4, 5], vec![0, 1, 1, 2, 2], 1).unwrap();
+        c.factorize(&[4.0, 1.0, 3.0, 1.0, 2.0], 0.0).unwrap();
+        let mut x = vec![1.0, 2.0, 3.0];
+        c.solve_in_place(&mut x).unwrap();
+        let a = [[4.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 2.0]];
+        for (row, b) in a.iter().zip([1.0, 2.0, 3.0]) {
+            let ax: f64 = row.iter().zip(&x).map(|(a, x)| a * x).sum();
+            assert!((ax - b).abs() < 1e-5, "{ax} against {b}");
+        }
+    }
+
+    #[test]
+    fn a_pivot_under_the_least_pivot_is_replaced_and_the_factor_stays_definite() {
+        // [[1, 2], [2, 1]] is indefinite: its second pivot is 1 - 4 = -3. With a least pivot of
+        // 1 it becomes 1, the factor is that of [[1, 2], [2, 5]], positive definite, and a
+        // solve with it is a descent direction: b . x > 0 for any b.
+        for single in [false, true] {
+            let mut c = AnyCholesky::new(vec![0, 2, 3], vec![0, 1, 1], 1, single).unwrap();
+            c.factorize(&[1.0, 2.0, 1.0], 1.0).unwrap();
+            let b = [1.0, -1.0];
+            let mut x = b.to_vec();
+            c.solve_in_place(&mut x).unwrap();
+            // The factor's matrix is [[1, 2], [2, 5]]: x = [7, -3] exactly (to f32 rounding).
+            assert!(
+                (x[0] - 7.0).abs() < 1e-5 && (x[1] + 3.0).abs() < 1e-5,
+                "{x:?}"
+            );
+            assert!(b[0] * x[0] + b[1] * x[1] > 0.0);
+        }
+    }
+
+    #[test]
     fn an_indefinite_matrix_is_an_error_not_a_panic() {
-        let mut c = Cholesky::new(vec![0, 2, 3], vec![0, 1, 1], 1).unwrap();
-        assert!(c.factorize(&[1.0, 2.0, 1.0]).is_err());
+        let mut c = Cholesky::<f64>::new(vec![0, 2, 3], vec![0, 1, 1], 1).unwrap();
+        assert!(c.factorize(&[1.0, 2.0, 1.0], 0.0).is_err());
         let mut x = vec![1.0, 1.0];
         assert!(c.solve_in_place(&mut x).is_err());
     }

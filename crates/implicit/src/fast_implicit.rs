@@ -341,7 +341,7 @@ impl FastImplicit {
     pub fn memory_estimate(mesh: &ClothMesh) -> u64 {
         let topo = Topology::new(mesh);
         let (col_ptr, row_idx) = topo.scalar_pattern();
-        let Ok(factor) = Cholesky::analyse(&col_ptr, &row_idx, 3) else {
+        let Ok(factor) = Cholesky::<f64>::analyse(&col_ptr, &row_idx, 3) else {
             return u64::MAX;
         };
         let n = topo.free() as u64;
@@ -475,7 +475,7 @@ impl FastImplicit {
             self.mu = Vec::new();
             let topo = Topology::new(mesh);
             let (col_ptr, row_idx) = topo.scalar_pattern();
-            let chol = Cholesky::new(col_ptr.clone(), row_idx, 3).map_err(method_error)?;
+            let chol = Cholesky::<f64>::new(col_ptr.clone(), row_idx, 3).map_err(method_error)?;
             let values =
                 try_filled(chol.nnz(), 0.0, "the fast-implicit matrix").map_err(alloc_error)?;
             self.system = Some(System {
@@ -528,7 +528,7 @@ impl FastImplicit {
                 v[sys.col_ptr[fa.min(fb) as usize] + 1 + slot as usize] -= k;
             }
         }
-        sys.chol.factorize(&sys.values).map_err(method_error)?;
+        sys.chol.factorize(&sys.values, 0.0).map_err(method_error)?;
         sys.key = Some(key);
         Ok(())
     }

@@ -22,11 +22,12 @@
 //! `K = E'' u u^T + max(0, T/|d|) (I - u u^T)` on the blocks of its ends (`T` the tension; the
 //! clamp keeps `K` positive semi-definite under compression). The system `H dx = -grad Phi` is
 //! solved inexactly: by a conjugate gradient preconditioned by the last Cholesky factor
-//! (faer's sparse `L L^T`), kept across iterations, multiplier updates, penalty changes and
-//! steps while it still brings the residual below three tenths of the gradient within
-//! [`MAX_PCG_ITERATIONS`] iterations and the solves with it have not together spent
-//! [`REFACTOR_BUDGET`] iterations beyond the first of each, and refactored at the current `H`
-//! otherwise. The fill-reducing ordering and symbolic factor are computed once per topology
+//! (faer's sparse `L L^T`, in single precision where the springs are at least as stiff as the
+//! mass term, see `single_precision`; the iterations and everything else run in double), kept
+//! across iterations, multiplier updates, penalty changes and steps while it still brings the
+//! residual below three tenths of the gradient within [`MAX_PCG_ITERATIONS`] iterations and the
+//! solves with it have not together spent [`REFACTOR_BUDGET`] iterations beyond the first of
+//! each, and refactored at the current `H` otherwise. The fill-reducing ordering and symbolic factor are computed once per topology
 //! (points, springs, pins). A backtracking (Armijo) line search on `Phi` makes every iteration
 //! a descent step (a preconditioned conjugate gradient started at zero always returns a
 //! descent direction of a positive-definite `H`). A Newton solve has converged once a step
@@ -122,7 +123,7 @@
 use cloth_mesh::{ClothMesh, ClothState, MAX_STRETCH, Vec3};
 use cloth_solver::{Collider, SolveError, Solver, SpatialHash, StepParams, StepReport};
 
-use crate::cholesky::Cholesky;
+use crate::cholesky::{AnyCholesky, Cholesky};
 use crate::commit::{commit, hold_still, inertial_prediction};
 use crate::memory::{Allocation, check_available, try_filled};
 use crate::retime::retime_friction;
@@ -249,7 +250,7 @@ pub struct ImplicitEuler {
 #[derive(Debug)]
 struct System {
     topo: Topology,
-    chol: Cholesky,
+    chol: AnyCholesky,
     /// The block pattern (a copy of the factor's, borrowed while assembling and multiplying).
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
@@ -320,7 +321,7 @@ impl ImplicitEuler {
     pub fn memory_estimate(mesh: &ClothMesh) -> u64 {
         let topo = Topology::new(mesh);
         let (col_ptr, row_idx) = topo.scalar_pattern();
-        let Ok(scalar) = Cholesky::analyse(&col_ptr, &row_idx, 1) else {
+        let Ok(scalar) = Cholesky::<f64>::analyse(&col_ptr, &row_idx, 1) else {
             return u64::MAX;
         };
         Self::estimate(&topo, mesh, scalar.factor_len() as u64)
@@ -357,7 +358,7 @@ impl ImplicitEuler {
         let topo = Topology::new(mesh);
         // Check the whole size before the block pattern, itself large, is built.
         let (scalar_ptr, scalar_idx) = topo.scalar_pattern();
-        let scalar = Cholesky::analyse(&scalar_ptr, &scalar_idx, 1).map_err(method_error)?;
+        let scalar = Cholesky::<f64>::analyse(&scalar_ptr, &scalar_idx, 1).map_err(method_error)?;
         drop((scalar_ptr, scalar_idx));
         check_available(
             Self::estimate(&topo, mesh, scalar.factor_len() as u64),
@@ -366,7 +367,8 @@ impl ImplicitEuler {
         .map_err(alloc_error)?;
         drop(scalar);
         let (col_ptr, row_idx) = topo.block_pattern();
-        let chol = Cholesky::new(col_ptr.clone(), row_idx.clone(), 1).map_err(method_error)?;
+        let chol =
+            AnyCholesky::new(col_ptr.clone(), row_idx.clone(), 1, true).map_err(method_error)?;
         self.values =
             try_filled(chol.nnz(), 0.0, "the implicit solver's matrix").map_err(alloc_error)?;
         self.system = Some(System {
@@ -546,7 +548,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// A solve with the factor failed.
 fn pcg(
     a: &Matrix<'_>,
-    factor: &mut Cholesky,
+    factor: &mut AnyCholesky,
     grad: &[f64],
     dx: &mut [f64],
     [r, z, p, ap]: &mut [Vec<f64>; 4],
@@ -585,6 +587,19 @@ fn pcg(
         }
     }
     Ok(None)
+}
+
+/// Whether the factor kept as preconditioner is computed in single precision, for a step whose
+/// mass term per point is `inertia` (N/m) on a cloth of spring constant `ks`: where the springs
+/// are at least as stiff as the mass term (one or two steps per frame at the course's
+/// defaults). A factor in `f32` streams half the memory through the factorisation and the
+/// triangular solves, and the preconditioned iterations, in `f64`, make up for its rounding.
+/// Where the mass term dominates, the fill of the factor decays by about `ks / inertia` per
+/// elimination level, its far entries fall below `f32`'s normal range, and arithmetic on
+/// subnormal numbers makes the single-precision factorisation slower than the double one
+/// (docs/performance.md).
+fn single_precision(inertia: f64, ks: f64) -> bool {
+    inertia <= ks
 }
 
 /// Replaces the last step's limit tensions `lambda` by the warm start of the next step,
@@ -683,6 +698,17 @@ impl Solver for ImplicitEuler {
                 let len = (state.positions[s.b as usize] - state.positions[s.a as usize]).norm();
                 len - MAX_STRETCH * s.rest > LIMIT_TOLERANCE * s.rest
             });
+        // A step solved with the stiff limit from its start carries `k_lim`, 1.4e5 times the
+        // mass term at the defaults, on every stretched spring: a single-precision factor of
+        // that matrix let a cloth taken over from Verlet's fall gain twice Verlet's largest
+        // kinetic energy (the swap test in `tests/stability.rs`), so such a step factors in
+        // double.
+        let single = single_precision(inertia, params.ks) && !stretched_start;
+        if chol.is_single() != single {
+            *chol = AnyCholesky::new(col_ptr.clone(), row_idx.clone(), 1, single)
+                .map_err(method_error)?;
+            *factored = false;
+        }
         let mut rho = if stretched_start {
             k_lim
         } else {
@@ -820,7 +846,7 @@ impl Solver for ImplicitEuler {
 
 /// The Newton matrix's storage, its factor and the vectors of one linear solve.
 struct Linear<'a> {
-    chol: &'a mut Cholesky,
+    chol: &'a mut AnyCholesky,
     col_ptr: &'a [usize],
     row_idx: &'a [usize],
     /// Whether `chol` holds a factor (of this or an earlier matrix).
@@ -890,7 +916,9 @@ fn newton(
             *lin.extra += its - 1;
         } else {
             *lin.factored = false;
-            lin.chol.factorize(lin.values).map_err(method_error)?;
+            lin.chol
+                .factorize(lin.values, problem.inertia)
+                .map_err(method_error)?;
             *lin.factored = true;
             *lin.extra = 0;
             for (r, g) in lin.dx.iter_mut().zip(lin.grad.iter()) {
@@ -1067,8 +1095,8 @@ mod tests {
         let mut values = vec![0.0; row_idx.len()];
         let mut grad = vec![0.0; 3 * topo.free()];
         p.assemble(&x, &x, &col_ptr, &mut grad, Some(&mut values));
-        let mut chol = Cholesky::new(col_ptr, row_idx, 1).unwrap();
-        chol.factorize(&values).unwrap();
+        let mut chol = AnyCholesky::new(col_ptr, row_idx, 1, true).unwrap();
+        chol.factorize(&values, p.inertia).unwrap();
         // And the solution is a descent direction: grad . H^-1 grad > 0.
         let mut dx = grad.clone();
         chol.solve_in_place(&mut dx).unwrap();
