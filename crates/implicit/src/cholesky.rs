@@ -338,33 +338,24 @@ mod tests {
     use super::*;
 
     #[test]
-    fn solves_a_small_spd_system_exactly() {
-        // [[4, 1, 0], [1, 3, 1], [0, 1, 2]] x = [1, 2, 3]; lower triangle by columns.
-        let mut c = Cholesky::<f64>::new(vec![0, 2, 4, 5], vec![0, 1, 1, 2, 2], 1).unwrap();
-        c.factorize(&[4.0, 1.0, 3.0, 1.0, 2.0], 0.0).unwrap();
-        let mut x = vec![1.0, 2.0, 3.0];
-        c.solve_in_place(&mut x).unwrap();
-        let a = [[4.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 2.0]];
-        for (row, b) in a.iter().zip([1.0, 2.0, 3.0]) {
-            let ax: f64 = row.iter().zip(&x).map(|(a, x)| a * x).sum();
-            // A well-conditioned 3x3 (condition number < 10): rounding only.
-            assert!((ax - b).abs() < 1e-14);
-        }
-    }
-
-    #[test]
-    fn a_single_precision_factor_solves_to_single_precision() {
-        // The same system as above: a condition number under 10, so the f32 factor's solution
-        // is within a few f32 roundings (6e-8 relative each) of the exact one; 1e-5 leaves a
-        // factor of a hundred over that and still fails on any wrong value.
-        let mut c = Cholesky::<f32>::new(vec![0, 2, 4, 5], vec![0, 1, 1, 2, 2], 1).unwrap();
-        c.factorize(&[4.0, 1.0, 3.0, 1.0, 2.0], 0.0).unwrap();
-        let mut x = vec![1.0, 2.0, 3.0];
-        c.solve_in_place(&mut x).unwrap();
-        let a = [[4.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 2.0]];
-        for (row, b) in a.iter().zip([1.0, 2.0, 3.0]) {
-            let ax: f64 = row.iter().zip(&x).map(|(a, x)| a * x).sum();
-            assert!((ax - b).abs() < 1e-5, "{ax} against {b}");
+    fn solves_a_small_spd_system_to_its_precision() {
+        // [[4, 1, 0], [1, 3, 1], [0, 1, 2]] x = [1, 2, 3]; lower triangle by columns. A
+        // condition number under 10, so the solution is within a few roundings of the exact
+        // one: 1e-14 in double; in single (6e-8 each), 1e-5 leaves a factor of a hundred and
+        // still fails on any wrong value.
+        for (single, tolerance) in [(false, 1e-14), (true, 1e-5)] {
+            let mut c = AnyCholesky::new(vec![0, 2, 4, 5], vec![0, 1, 1, 2, 2], 1, single).unwrap();
+            c.factorize(&[4.0, 1.0, 3.0, 1.0, 2.0], 0.0).unwrap();
+            let mut x = vec![1.0, 2.0, 3.0];
+            c.solve_in_place(&mut x).unwrap();
+            let a = [[4.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 2.0]];
+            for (row, b) in a.iter().zip([1.0, 2.0, 3.0]) {
+                let ax: f64 = row.iter().zip(&x).map(|(a, x)| a * x).sum();
+                assert!(
+                    (ax - b).abs() < tolerance,
+                    "single {single}: {ax} against {b}"
+                );
+            }
         }
     }
 

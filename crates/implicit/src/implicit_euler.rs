@@ -698,11 +698,11 @@ impl Solver for ImplicitEuler {
                 let len = (state.positions[s.b as usize] - state.positions[s.a as usize]).norm();
                 len - MAX_STRETCH * s.rest > LIMIT_TOLERANCE * s.rest
             });
-        // A step solved with the stiff limit from its start carries `k_lim`, 1.4e5 times the
-        // mass term at the defaults, on every stretched spring: a single-precision factor of
-        // that matrix let a cloth taken over from Verlet's fall gain twice Verlet's largest
-        // kinetic energy (the swap test in `tests/stability.rs`), so such a step factors in
-        // double.
+        // A step solved with the stiff limit from its start carries `k_lim` (five orders of
+        // magnitude over the mass term at the defaults) on every stretched spring, and a
+        // single-precision factor of that matrix preconditions it too coarsely: a cloth taken
+        // over from Verlet's fall then gains kinetic energy (the swap test in
+        // `tests/stability.rs`, figures in docs/performance.md). Such a step factors in double.
         let single = single_precision(inertia, params.ks) && !stretched_start;
         if chol.is_single() != single {
             *chol = AnyCholesky::new(col_ptr.clone(), row_idx.clone(), 1, single)
