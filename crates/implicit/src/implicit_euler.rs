@@ -23,12 +23,13 @@
 //! clamp keeps `K` positive semi-definite under compression). The system `H dx = -grad Phi` is
 //! solved inexactly: by a conjugate gradient preconditioned by the last Cholesky factor
 //! (faer's sparse `L L^T`, in single precision where the springs are at least as stiff as the
-//! mass term, see `single_precision`; the iterations and everything else run in double), kept
-//! across iterations, multiplier updates, penalty changes and steps while it still brings the
-//! residual below three tenths of the gradient within [`MAX_PCG_ITERATIONS`] iterations and the
-//! solves with it have not together spent [`REFACTOR_BUDGET`] iterations beyond the first of
-//! each, and refactored at the current `H` otherwise. The fill-reducing ordering and symbolic factor are computed once per topology
-//! (points, springs, pins). A backtracking (Armijo) line search on `Phi` makes every iteration
+//! mass term, see `single_precision`, except on a step that starts on the stiff limit, below;
+//! the iterations and everything else run in double), kept across iterations, multiplier
+//! updates, penalty changes and steps while it still brings the residual below three tenths of
+//! the gradient within [`MAX_PCG_ITERATIONS`] iterations and the solves with it have not
+//! together spent [`REFACTOR_BUDGET`] iterations beyond the first of each, and refactored at
+//! the current `H` otherwise. The fill-reducing ordering and symbolic factor are computed once
+//! per topology (points, springs, pins) and again when the factor's precision changes. A backtracking (Armijo) line search on `Phi` makes every iteration
 //! a descent step (a preconditioned conjugate gradient started at zero always returns a
 //! descent direction of a positive-definite `H`). A Newton solve has converged once a step
 //! moves no point farther than the tolerance over the steps per frame ([`NEWTON_TOLERANCE`]),
@@ -347,8 +348,9 @@ impl ImplicitEuler {
         topo.bytes() + pattern + values + factor + workspace + scratch
     }
 
-    /// Makes sure the topology and symbolic factor describe `mesh`.
-    fn prepare(&mut self, mesh: &ClothMesh) -> Result<(), SolveError> {
+    /// Makes sure the topology and symbolic factor describe `mesh`, a new factor in single
+    /// precision when `single`.
+    fn prepare(&mut self, mesh: &ClothMesh, single: bool) -> Result<(), SolveError> {
         if self.system.as_ref().is_some_and(|s| s.topo.matches(mesh)) {
             return Ok(());
         }
@@ -368,7 +370,7 @@ impl ImplicitEuler {
         drop(scalar);
         let (col_ptr, row_idx) = topo.block_pattern();
         let chol =
-            AnyCholesky::new(col_ptr.clone(), row_idx.clone(), 1, true).map_err(method_error)?;
+            AnyCholesky::new(col_ptr.clone(), row_idx.clone(), 1, single).map_err(method_error)?;
         self.values =
             try_filled(chol.nnz(), 0.0, "the implicit solver's matrix").map_err(alloc_error)?;
         self.system = Some(System {
@@ -671,18 +673,6 @@ impl Solver for ImplicitEuler {
             hold_still(mesh, colliders, params, state, &mut self.hash)?;
             return Ok(StepReport::default());
         }
-        self.prepare(mesh)?;
-        let Some(System {
-            topo,
-            chol,
-            col_ptr,
-            row_idx,
-            factored,
-            extra,
-        }) = self.system.as_mut()
-        else {
-            return Err(method_error("no linear system was built".to_owned()));
-        };
         let (k_lim, base) = if params.stretch_limit {
             let k_lim = limiter_stiffness(mesh, params);
             (k_lim, limit_penalty(params, inertia, k_lim))
@@ -704,6 +694,18 @@ impl Solver for ImplicitEuler {
         // over from Verlet's fall then gains kinetic energy (the swap test in
         // `tests/stability.rs`, figures in docs/performance.md). Such a step factors in double.
         let single = single_precision(inertia, params.ks) && !stretched_start;
+        self.prepare(mesh, single)?;
+        let Some(System {
+            topo,
+            chol,
+            col_ptr,
+            row_idx,
+            factored,
+            extra,
+        }) = self.system.as_mut()
+        else {
+            return Err(method_error("no linear system was built".to_owned()));
+        };
         if chol.is_single() != single {
             *chol = AnyCholesky::new(col_ptr.clone(), row_idx.clone(), 1, single)
                 .map_err(method_error)?;
