@@ -338,7 +338,9 @@ impl ImplicitEuler {
         let values = 8 * entries;
         // Each scalar entry of L becomes a 3 x 3 block, less the upper triangles of the
         // diagonal blocks; the workspace is of the order of the largest supernode, bounded by
-        // the factor itself.
+        // the factor itself. Counted in double precision, the most the factor takes: in single
+        // it takes half, and the matrix's values rounded to single (half of `values`) fit in
+        // the other half.
         let factor = 8 * (9 * scalar_factor).saturating_sub(3 * n);
         let workspace = factor / 4;
         // grad, rhs and the four conjugate-gradient vectors (3 per free point); y, x and trial
