@@ -8,13 +8,18 @@
 //! machine, the figures of a run with much of it are not the code's).
 //!
 //! Each configuration is the course's `pinned4` cloth scaled to `--grid N` points per side at the
-//! standard spacing ([`cloth_bench::pinned_grid`]), warmed up for one simulated second, then
-//! timed by [`cloth_bench::time_frames`], or with `--interleave` frame by frame in turn with
-//! the grid's other configurations by [`cloth_bench::time_interleaved_each`]. Any registered
+//! standard spacing ([`cloth_bench::pinned_grid`]), with `pinned4`'s parameters as `--set`
+//! changes them, warmed up for `--warmup` frames (one simulated second by default), then timed
+//! by [`cloth_bench::time_frames`], or with `--interleave` frame by frame in turn with the
+//! grid's other configurations by [`cloth_bench::time_interleaved_each`]. Any registered
 //! solver can be timed by name, each at its recommended steps per frame unless `--steps` sets
-//! them all; `--threads` and `--order` set the options of those names of the solvers that have
-//! them (Verlet's). Criterion benches (`cargo bench -p cloth-solver`) are the
-//! measurement of record; this command lets a user reproduce the README's table.
+//! them (for all, or for one solver by name); `--threads` and `--order` set the options of
+//! those names of the solvers that have them (Verlet's). With `--interleave` each row gives two
+//! ratios to the grid's first configuration: the median over rounds of the two frames' ratio
+//! (the typical frame), and the ratio of the mean frame times (what a user waits for over the
+//! whole run, the fall's costly frames included). Criterion benches (`cargo bench -p
+//! cloth-solver`) are the measurement of record; this command lets a user reproduce the
+//! README's table.
 
 use std::fmt::Write as _;
 
@@ -42,19 +47,32 @@ pub struct Args {
     /// the solvers that have one (default: theirs).
     #[arg(long = "threads", value_parser = clap::value_parser!(u16).range(1..=256))]
     threads: Vec<u16>,
-    /// Self-collision on or off.
-    #[arg(long = "self-collision", value_enum, default_value_t = Switch::On)]
-    self_collision: Switch,
+    /// Self-collision on or off (default: on, or as `--set simulation.self_collision` says).
+    #[arg(long = "self-collision", value_enum)]
+    self_collision: Option<Switch>,
     /// Constraint order (repeatable): the `order` option of the solvers that have one; Verlet's
     /// are faithful (the course's), parallel (row bands) and colored (spring classes with no
     /// shared point; the fastest on big cloths). Default: the solver's own.
     #[arg(long = "order")]
     orders: Vec<String>,
-    /// Steps per frame of every configuration (default: each solver's recommendation, as
-    /// `clothsim solvers` lists them).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
-    steps: Option<u32>,
-    /// Frames timed per configuration (after one simulated second of warm-up).
+    /// Steps per frame (repeatable): `N` for every configuration, `SOLVER=N` for one solver's
+    /// (`--steps verlet=200`), which wins over a plain `N`. Default: each solver's
+    /// recommendation, as `clothsim solvers` lists them.
+    #[arg(long = "steps", value_name = "[SOLVER=]N", value_parser = parse_steps)]
+    steps: Vec<Steps>,
+    /// A step parameter of the timed `pinned4` cloth, as a dotted key and a JSON value
+    /// (repeatable), e.g. `--set cloth.ks=1e6`: one of `cloth.ks`, `cloth.density`,
+    /// `cloth.damping`, `cloth.enable_structural`, `cloth.enable_shearing`,
+    /// `cloth.enable_bending`, `simulation.gravity`, `simulation.frames_per_sec`,
+    /// `simulation.stretch_limit`, `simulation.self_collision` (the grid is `--grid`'s, the
+    /// steps `--steps`').
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    sets: Vec<String>,
+    /// Frames simulated before the timing starts (default: one simulated second, so the cloth
+    /// has fallen and come into tension; 0 times the run from the flat start).
+    #[arg(long, value_name = "FRAMES", default_value_t = 90, value_parser = clap::value_parser!(u32).range(0..=100_000))]
+    warmup: u32,
+    /// Frames timed per configuration (after the warm-up).
     #[arg(long, default_value_t = 90, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     frames: u32,
     /// Time the configurations of each grid in turn, one frame of each per round, and add
@@ -82,6 +100,74 @@ enum Switch {
     Off,
 }
 
+/// A `--steps` value: steps per frame for every configuration, or for one solver's.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Steps {
+    /// The solver it is for; `None` for every configuration.
+    solver: Option<String>,
+    /// Steps per frame, 1 to [`MAX_STEPS`].
+    steps: u32,
+}
+
+/// The most steps per frame `--steps` takes.
+const MAX_STEPS: u32 = 10_000;
+
+/// Parses `N` or `SOLVER=N`.
+fn parse_steps(arg: &str) -> Result<Steps, String> {
+    let (solver, n) = match arg.split_once('=') {
+        Some((solver, n)) if !solver.trim().is_empty() => (Some(solver.trim().to_owned()), n),
+        Some(_) => return Err("expected N or SOLVER=N, e.g. 30 or verlet=200".to_owned()),
+        None => (None, arg),
+    };
+    match n.trim().parse::<u32>() {
+        Ok(steps) if (1..=MAX_STEPS).contains(&steps) => Ok(Steps { solver, steps }),
+        _ => Err(format!(
+            "{:?} is not a number of steps per frame: it must be a whole number from 1 to \
+             {MAX_STEPS}",
+            n.trim()
+        )),
+    }
+}
+
+/// The `--set` keys the benchmark takes: the step parameters (the grid and the steps have
+/// flags of their own, and the cloth has no collision objects).
+const SET_KEYS: [&str; 10] = [
+    "cloth.ks",
+    "cloth.density",
+    "cloth.damping",
+    "cloth.enable_structural",
+    "cloth.enable_shearing",
+    "cloth.enable_bending",
+    "simulation.gravity",
+    "simulation.frames_per_sec",
+    "simulation.stretch_limit",
+    "simulation.self_collision",
+];
+
+/// The step parameters of the timed cloth: `pinned4`'s, with the `--set` changes checked as a
+/// scene file's values are, and `--self-collision` over them.
+///
+/// # Errors
+/// A `--set` key the benchmark does not take, or a value the scene refuses.
+fn step_params(args: &Args) -> anyhow::Result<StepParams> {
+    for set in &args.sets {
+        let key = set.split_once('=').map_or(set.as_str(), |(k, _)| k).trim();
+        if !SET_KEYS.contains(&key) {
+            anyhow::bail!(
+                "--set {set}: bench times the pinned4 cloth at --grid N points a side, so --set \
+                 takes only its step parameters: {} (the grid is --grid's, the steps --steps')",
+                SET_KEYS.join(", ")
+            );
+        }
+    }
+    let scene = cloth_scene::load("pinned4", &args.sets)?;
+    let mut params = scene.params;
+    if let Some(switch) = args.self_collision {
+        params.self_collision = switch == Switch::On;
+    }
+    Ok(params)
+}
+
 /// One configuration to time: a solver, its options and its steps per frame.
 #[derive(Debug, Clone)]
 struct Config {
@@ -103,6 +189,29 @@ impl Config {
                 .iter()
                 .map(|name| registry.get(name).copied())
                 .collect::<Result<_, _>>()?
+        };
+        for steps in &args.steps {
+            if let Some(name) = &steps.solver
+                && !entries.iter().any(|e| e.name() == name)
+            {
+                let timed: Vec<&str> = entries.iter().map(SolverEntry::name).collect();
+                anyhow::bail!(
+                    "--steps {name}={}: {name} is not a timed solver; the timed solvers are {} \
+                     (add --solver {name} to time it)",
+                    steps.steps,
+                    timed.join(", ")
+                );
+            }
+        }
+        // A solver's own `--steps NAME=N` wins over a plain `--steps N`; the last of each counts.
+        let steps_for = |entry: &SolverEntry| {
+            let named = args
+                .steps
+                .iter()
+                .rev()
+                .find(|s| s.solver.as_deref() == Some(entry.name()));
+            let all = args.steps.iter().rev().find(|s| s.solver.is_none());
+            named.or(all).map_or(entry.steps_per_frame(), |s| s.steps)
         };
         let mut out = Vec::new();
         for entry in entries {
@@ -133,7 +242,7 @@ impl Config {
                     let options = Value::Object(options);
                     entry.check(&options)?;
                     let params = StepParams {
-                        steps_per_frame: args.steps.unwrap_or(entry.steps_per_frame()),
+                        steps_per_frame: steps_for(&entry),
                         ..*base
                     };
                     out.push(Config {
@@ -186,6 +295,8 @@ struct Row {
     result: BenchResult,
     /// With `--interleave`: the time ratio to the grid's first configuration.
     ratio: Option<f64>,
+    /// With `--interleave`: the mean frame time over the grid's first configuration's.
+    mean_ratio: Option<f64>,
     /// The longest spring over its rest length after the last timed frame: a timing is only
     /// worth quoting for a cloth that held together (the course's limit keeps a hanging cloth
     /// near 1.1; an unstable run shows several times that).
@@ -209,7 +320,7 @@ fn time_grid(args: &Args, configs: &[Config], n: usize) -> anyhow::Result<Vec<Ro
     let mesh = pinned_grid(n).with_context(|| format!("--grid {n}"))?;
     check_memory(args, configs, &mesh, n)?;
     let run = BenchRun {
-        warmup_frames: 90,
+        warmup_frames: args.warmup,
         frames: args.frames,
     };
     if !args.interleave {
@@ -229,6 +340,7 @@ fn time_grid(args: &Args, configs: &[Config], n: usize) -> anyhow::Result<Vec<Ro
                 config: config.clone(),
                 result,
                 ratio: None,
+                mean_ratio: None,
                 stretch: max_stretch_ratio(&mesh, &state),
                 steal: steal_since(before),
             });
@@ -250,6 +362,7 @@ fn time_grid(args: &Args, configs: &[Config], n: usize) -> anyhow::Result<Vec<Ro
     let timed = time_interleaved_each(&mut runs, &mesh, &[], &params, run)
         .map_err(|(i, e)| anyhow::Error::new(e).context(configs[i].describe(n)))?;
     let steal = steal_since(before);
+    let first_seconds = timed.first().map_or(0.0, |t| t.result.seconds);
     for ((solver, state), config) in solvers.iter_mut().zip(states.iter_mut()).zip(configs) {
         held_together(solver.as_mut(), &mesh, &config.params, state, config, run)
             .with_context(|| config.describe(n))?;
@@ -263,6 +376,7 @@ fn time_grid(args: &Args, configs: &[Config], n: usize) -> anyhow::Result<Vec<Ro
             config: config.clone(),
             result: t.result,
             ratio: Some(t.time_ratio_to_first),
+            mean_ratio: Some(t.result.seconds / first_seconds),
             stretch: max_stretch_ratio(&mesh, state),
             steal,
         })
@@ -342,10 +456,7 @@ fn steal_since(before: Option<CpuTimes>) -> Option<f64> {
 /// # Errors
 /// A grid that cannot be built, a solver that is not available, or a diverged run.
 pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
-    let params = StepParams {
-        self_collision: args.self_collision == Switch::On,
-        ..StepParams::default()
-    };
+    let params = step_params(args)?;
     let configs = Config::all(args, registry, &params)?;
     let mut rows = Vec::new();
     for &n in &args.grids {
@@ -361,6 +472,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
                      config,
                      result: r,
                      ratio,
+                     mean_ratio,
                      stretch,
                      steal,
                  }| {
@@ -375,11 +487,14 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
                         "points": r.points,
                         "springs": r.springs,
                         "frames": r.frames,
+                        "warmup_frames": args.warmup,
+                        "ks": params.ks,
                         "ms_per_frame_median": r.median_ms_per_frame(),
                         "ms_per_frame_mean": r.ms_per_frame(),
                         "particle_steps_per_sec": r.particle_steps_per_sec(),
                         "realtime_factor": r.realtime_factor(),
                         "time_ratio_to_first": ratio,
+                        "mean_time_ratio_to_first": mean_ratio,
                         "max_stretch_ratio_at_end": stretch,
                         "host_steal_percent": steal,
                     })
@@ -405,12 +520,16 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             let _ = write!(out, " {:>9}", "vs first");
         }
         let _ = write!(out, " {:>8} {:>6} {:>5}", "stretch", "steal", "steps");
+        if args.interleave {
+            let _ = write!(out, " {:>9}", "mean vs first");
+        }
         out.push('\n');
         for Row {
             n,
             config,
             result: r,
             ratio,
+            mean_ratio,
             stretch,
             steal,
         } in &rows
@@ -440,6 +559,9 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
                 }
             }
             let _ = write!(out, " {:>5}", r.steps_per_frame);
+            if let Some(mean_ratio) = mean_ratio {
+                let _ = write!(out, " {mean_ratio:>12.3}x");
+            }
             out.push('\n');
         }
     }

@@ -455,8 +455,15 @@ fn bench_interleaves_every_configuration_and_reports_ratios_to_the_first() {
         let expected = if row["solver"] == "verlet" { 30 } else { 1 };
         assert_eq!(row["steps_per_frame"], expected, "{row}");
     }
-    // The table ends with the ratio column, then the stretch, the steal share and the steps;
-    // without `--interleave` the JSON has no ratio.
+    // The ratio of the mean frame times is each configuration's total time over the first's.
+    let first_mean = rows[0]["ms_per_frame_mean"].as_f64().unwrap();
+    for row in rows {
+        let mean = row["ms_per_frame_mean"].as_f64().unwrap();
+        let ratio = row["mean_time_ratio_to_first"].as_f64().unwrap();
+        assert!((ratio / (mean / first_mean) - 1.0).abs() < 1e-9, "{row}");
+    }
+    // The table ends with the ratio column, then the stretch, the steal share, the steps and
+    // the ratio of the means; without `--interleave` the JSON has no ratio.
     let table = clothsim(&["bench", "--grid", "8", "--frames", "2", "--interleave"]);
     assert!(table.status.success(), "{}", stderr(&table));
     let text = String::from_utf8(table.stdout).unwrap();
@@ -464,18 +471,21 @@ fn bench_interleaves_every_configuration_and_reports_ratios_to_the_first() {
         text.lines()
             .next()
             .unwrap()
-            .ends_with("vs first  stretch  steal steps")
+            .ends_with("vs first  stretch  steal steps mean vs first")
     );
     let first = text.lines().nth(1).unwrap();
     assert!(first.contains(" 1.000x "), "{first}");
-    assert!(first.ends_with(" 30"), "{first}");
+    assert!(first.ends_with(" 30        1.000x"), "{first}");
     if cfg!(target_os = "linux") {
-        let steal = first.trim_end_matches(|c: char| c.is_ascii_digit() || c == ' ');
+        let steal = first
+            .trim_end_matches(" 30        1.000x")
+            .trim_end_matches(' ');
         assert!(steal.ends_with('%'), "{first}");
     }
     let plain = clothsim(&["bench", "--grid", "8", "--frames", "2", "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&plain.stdout).unwrap();
     assert!(v[0]["time_ratio_to_first"].is_null());
+    assert!(v[0]["mean_time_ratio_to_first"].is_null());
     // `--steps` sets every configuration's steps per frame.
     let o = clothsim(&[
         "bench", "--grid", "6", "--frames", "1", "--steps", "7", "--json",
@@ -483,6 +493,81 @@ fn bench_interleaves_every_configuration_and_reports_ratios_to_the_first() {
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v[0]["steps_per_frame"], 7);
+}
+
+#[test]
+fn bench_takes_step_parameters_per_solver_steps_and_the_warm_up() {
+    // A solver's own `--steps NAME=N` wins over the plain `--steps N`, whatever their order;
+    // `--set` reaches the timed cloth, and `--warmup 0` times it from the flat start.
+    let o = clothsim(&[
+        "bench",
+        "--grid",
+        "6",
+        "--frames",
+        "1",
+        "--solver",
+        "verlet",
+        "--solver",
+        "implicit",
+        "--steps",
+        "verlet=200",
+        "--steps",
+        "2",
+        "--set",
+        "cloth.ks=1e6",
+        "--set",
+        "simulation.self_collision=false",
+        "--warmup",
+        "0",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rows = v.as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    assert_eq!(rows[0]["steps_per_frame"], 200);
+    assert_eq!(rows[1]["steps_per_frame"], 2);
+    for row in rows {
+        assert_eq!(row["ks"], 1e6, "{row}");
+        assert_eq!(row["self_collision"], false, "{row}");
+        assert_eq!(row["warmup_frames"], 0, "{row}");
+    }
+    // `--self-collision` has the last word over `--set`.
+    let o = clothsim(&[
+        "bench",
+        "--grid",
+        "6",
+        "--frames",
+        "1",
+        "--set",
+        "simulation.self_collision=false",
+        "--self-collision",
+        "on",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v[0]["self_collision"], true);
+    // What the benchmark cannot take is refused, naming the argument and what is allowed.
+    for (args, message) in [
+        (
+            &["--set", "cloth.width=3"][..],
+            "--set cloth.width=3: bench times the pinned4 cloth",
+        ),
+        (&["--set", "cloth.ks=-1"][..], "cloth.ks is -1"),
+        (
+            &["--steps", "implicit=2"][..],
+            "--steps implicit=2: implicit is not a timed solver",
+        ),
+        (&["--steps", "verlet=0"][..], "from 1 to 10000"),
+        (&["--steps", "=3"][..], "expected N or SOLVER=N"),
+    ] {
+        let mut all = vec!["bench", "--grid", "6", "--frames", "1"];
+        all.extend(args);
+        let o = clothsim(&all);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(stderr(&o).contains(message), "{args:?}: {}", stderr(&o));
+    }
 }
 
 #[test]
