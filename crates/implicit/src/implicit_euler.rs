@@ -50,7 +50,7 @@
 //! while the cloth moves: a spring that starts or stops binding would change the Newton matrix
 //! by `k_lim`, which the kept factor no longer approximates. The limit is instead solved by the
 //! method of multipliers, with one multiplier `lambda >= 0` (the limit tension, N) per spring
-//! and a penalty `rho` from `10 max(ks, m (1 + c h) / h^2)` up to `k_lim`
+//! and a penalty `rho` per spring from `10 max(ks, m (1 + c h) / h^2)` up to `k_lim`
 //! (`limit_penalty` in `spring_energy.rs`), in the term
 //!
 //! ```text
@@ -70,10 +70,21 @@
 //!    `lambda <- max(0, a + rho g)` (fixed point: `lambda = k_lim max(0, g)`, the stiff
 //!    spring's tension);
 //! 4. stops once no spring is over `1.1 L` by more than [`LIMIT_TOLERANCE`] of its rest
-//!    length over the steps per frame, or `rho = k_lim` (the solve was then of the stiff
-//!    spring), or after [`MAX_LIMIT_UPDATES`] updates; otherwise multiplies `rho` by 10 (at
-//!    most `k_lim`) when the largest overshoot has not fallen to a quarter of the last one
-//!    (Bertsekas' rule), and goes back to 2 from the current positions.
+//!    length over the steps per frame and no spring that carries limit tension is short of
+//!    `1.1 L` by more than [`SLACK_SHARE`] times that (the limit's solution puts tension only
+//!    on springs at the limit), or once every spring still off by more has `rho = k_lim` (its
+//!    solve was then of the stiff spring), or after [`MAX_LIMIT_UPDATES`] updates; otherwise
+//!    multiplies by 10 (at most `k_lim`) the penalty of each spring off by more than half that
+//!    whose error has not fallen to a quarter of the last update's (Bertsekas' rule, spring by
+//!    spring), and goes back to 2 from the current positions.
+//!
+//! Each spring has its own penalty because a cloth that pulls taut converges unevenly: a few
+//! hundred springs of its hanging columns take several updates while the rest converge at once.
+//! Raised on every spring, the penalty would change the Newton matrix as much on the springs
+//! that were already right, and the stiff penalty on springs just inside the limit switches
+//! their limit on and off between Newton iterations, which costs line-search halvings and
+//! refactorisations; raised only where the limit converges slowly, the matrix changes where it
+//! must and the kept factor still preconditions it.
 //!
 //! Across steps the penalty starts at its least value, except that a step that starts with a spring
 //! more than [`LIMIT_TOLERANCE`] past the limit (as the course's sweep, a swap from Verlet or an
@@ -155,7 +166,8 @@ pub const MAX_NEWTON_ITERATIONS: u32 = 50;
 pub const MAX_LIMIT_UPDATES: u32 = 12;
 
 /// A step updates the stretch limit's multipliers and solves again while a spring is over
-/// `1.1 rest` by more than this fraction of its rest length, divided by the steps per frame:
+/// `1.1 rest` by more than this fraction of its rest length (or, carrying limit tension, short
+/// of it by more than ten times this), divided by the steps per frame:
 /// 0.1 % at one step per frame, a hundredth of the limit's own 10 %. Divided, because a spring that
 /// each step leaves anywhere within the tolerance moves its ends by up to that much from one
 /// step to the next: 20 um on a 2 cm spring, a jitter of 1.8 mm/s at one step per frame that
@@ -174,13 +186,30 @@ pub const LIMIT_TOLERANCE: f64 = 0.001;
 /// at which a cloth counts as settled).
 const RESTING_SPEED: f64 = 1e-3;
 
-/// The limit's penalty grows by this factor after a multiplier update that did not take the
-/// largest overshoot down to [`OVERSHOOT_DECREASE`] of the last one (Bertsekas' rule), and for
-/// the next step after a step whose Newton solve did not converge.
+/// A spring's limit penalty grows by this factor after a multiplier update that did not take
+/// its error down to [`OVERSHOOT_DECREASE`] of the last one (Bertsekas' rule), and every
+/// spring's for the next step after a step whose Newton solve did not converge.
 const PENALTY_GROWTH: f64 = 10.0;
 
-/// The fraction of the last overshoot a multiplier update must leave for the penalty to stay.
+/// The fraction of its last overshoot a multiplier update must leave a spring for its penalty
+/// to stay.
 const OVERSHOOT_DECREASE: f64 = 0.25;
+
+/// A spring's penalty grows only while its error (see [`SLACK_SHARE`]) is over this share of
+/// [`LIMIT_TOLERANCE`]: a spring well inside the tolerance needs no stiffer penalty, and one
+/// that nears it gets one an update before it would keep the step from ending.
+const RAISE_SHARE: f64 = 0.5;
+
+/// A spring that carries limit tension while shorter than the limit is off the limit's
+/// solution (where a spring under the limit carries none) by its shortfall over this: the step
+/// solves again while a tensed spring is short of the limit by more than `SLACK_SHARE` times
+/// [`LIMIT_TOLERANCE`] of its rest length (1 % at one step per frame). The multipliers leave
+/// such tension on a spring that the motion has just slackened after it was pulled hard; held
+/// up by it, the cloth springs back and gains kinetic energy that the converged step does not
+/// give it (after a swap from Verlet's fall, about twice as much). Looser than
+/// [`LIMIT_TOLERANCE`]: each update it forces is a Newton solve, and a few tenths of a
+/// millimetre of slack in a tensed spring store little energy.
+const SLACK_SHARE: f64 = 10.0;
 
 /// A step's multipliers start from the last step's limit tensions moved on by this share of
 /// their change over the last step: a falling cloth's tensions grow from step to step, and
@@ -242,6 +271,9 @@ pub struct ImplicitEuler {
     lambda_before: Vec<f64>,
     /// The factor on the limit's least penalty for the next step.
     stiffening: f64,
+    /// Each spring's overshoot over the limit after the last multiplier update, as a share of
+    /// its rest length (Bertsekas' rule compares the next one with it).
+    overshoot: Vec<f64>,
     /// The colliders with their friction retimed to the step.
     colliders: Vec<Collider>,
     hash: SpatialHash,
@@ -305,6 +337,7 @@ impl ImplicitEuler {
             lambda: Vec::new(),
             lambda_before: Vec::new(),
             stiffening: 1.0,
+            overshoot: Vec::new(),
             colliders: Vec::new(),
             hash: SpatialHash::default(),
         }
@@ -344,9 +377,9 @@ impl ImplicitEuler {
         let factor = 8 * (9 * scalar_factor).saturating_sub(3 * n);
         let workspace = factor / 4;
         // grad, rhs and the four conjugate-gradient vectors (3 per free point); y, x and trial
-        // (3 per point); the limit's multipliers of the last two steps and laws (two and four
-        // per spring).
-        let scratch = 8 * (6 * 3 * n + 9 * mesh.len() as u64 + 6 * mesh.springs().len() as u64);
+        // (3 per point); the limit's multipliers of the last two steps, the overshoots and the
+        // laws (two, one and four per spring).
+        let scratch = 8 * (6 * 3 * n + 9 * mesh.len() as u64 + 7 * mesh.springs().len() as u64);
         topo.bytes() + pattern + values + factor + workspace + scratch
     }
 
@@ -755,7 +788,7 @@ impl Solver for ImplicitEuler {
                 .map_err(method_error)?;
             *factored = false;
         }
-        let mut rho = if stretched_start {
+        let rho = if stretched_start {
             k_lim
         } else {
             (base * self.stiffening).min(k_lim)
@@ -809,9 +842,11 @@ impl Solver for ImplicitEuler {
         let limit_tolerance = LIMIT_TOLERANCE / f64::from(params.steps_per_frame);
         let mut iterations = 0;
         let mut residual;
-        let mut overshoot_before = f64::INFINITY;
         let mut unconverged = false;
         let mut updates = 0;
+        // Each spring's overshoot after the last multiplier update (none yet).
+        self.overshoot.clear();
+        self.overshoot.resize(mesh.springs().len(), f64::INFINITY);
         loop {
             let solve = newton(
                 &problem,
@@ -831,30 +866,41 @@ impl Solver for ImplicitEuler {
                 unconverged = true;
                 break;
             }
-            // The multiplier update: each becomes the limit force the solve's state carries.
-            let mut overshoot: f64 = 0.0;
-            for ((s, law), lambda) in mesh
+            // The multiplier update: each becomes the limit force the solve's state carries,
+            // and each penalty grows by Bertsekas' rule, spring by spring.
+            let mut largest: f64 = 0.0;
+            let mut soft_left = false;
+            for (((s, law), lambda), before) in mesh
                 .springs()
                 .iter()
-                .zip(&problem.laws)
+                .zip(problem.laws.iter_mut())
                 .zip(self.lambda.iter_mut())
+                .zip(self.overshoot.iter_mut())
             {
                 let len = (self.x[s.b as usize] - self.x[s.a as usize]).norm();
-                overshoot = overshoot.max(law.over(len) / law.rest);
                 *lambda = law.limit_force(len);
+                // A spring is off its limit's solution when it is past the limit, or when it
+                // still carries limit tension while short of it (a tension the multipliers
+                // overestimate, which holds the cloth up and lets it spring back), the latter
+                // measured against the looser `SLACK_SHARE` of the tolerance.
+                let over = law.over(len) / law.rest;
+                let error = if *lambda > 0.0 {
+                    over.max(-over / SLACK_SHARE)
+                } else {
+                    over
+                };
+                largest = largest.max(error);
+                soft_left |= error > limit_tolerance && law.rho < k_lim;
+                if error > RAISE_SHARE * limit_tolerance && error > OVERSHOOT_DECREASE * *before {
+                    law.rho = (PENALTY_GROWTH * law.rho).min(k_lim);
+                }
+                *before = error.max(0.0);
+                law.offset = *lambda * keep(law.rho);
             }
-            if overshoot <= limit_tolerance || rho >= k_lim || updates == MAX_LIMIT_UPDATES {
+            if largest <= limit_tolerance || !soft_left || updates == MAX_LIMIT_UPDATES {
                 break;
             }
             updates += 1;
-            if overshoot > OVERSHOOT_DECREASE * overshoot_before {
-                rho = (PENALTY_GROWTH * rho).min(k_lim);
-            }
-            overshoot_before = overshoot;
-            for (law, &lambda) in problem.laws.iter_mut().zip(&self.lambda) {
-                law.rho = rho;
-                law.offset = lambda * keep(rho);
-            }
         }
         if k_lim == 0.0 {
             self.stiffening = 1.0;
