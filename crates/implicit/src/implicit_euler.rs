@@ -304,6 +304,8 @@ struct Problem<'a> {
     inertia: f64,
     /// `m g`, N.
     weight: Vec3,
+    /// Scratch of [`Problem::assemble`]: each spring's length, m, and its inverse.
+    lengths: Vec<(f64, f64)>,
 }
 
 impl ImplicitEuler {
@@ -377,9 +379,9 @@ impl ImplicitEuler {
         let factor = 8 * (9 * scalar_factor).saturating_sub(3 * n);
         let workspace = factor / 4;
         // grad, rhs and the four conjugate-gradient vectors (3 per free point); y, x and trial
-        // (3 per point); the limit's multipliers of the last two steps, the overshoots and the
-        // laws (two, one and four per spring).
-        let scratch = 8 * (6 * 3 * n + 9 * mesh.len() as u64 + 7 * mesh.springs().len() as u64);
+        // (3 per point); the limit's multipliers of the last two steps, the overshoots, the
+        // laws and the lengths (two, one, four and two per spring).
+        let scratch = 8 * (6 * 3 * n + 9 * mesh.len() as u64 + 9 * mesh.springs().len() as u64);
         topo.bytes() + pattern + values + factor + workspace + scratch
     }
 
@@ -464,7 +466,7 @@ impl Problem<'_> {
     /// Writes `grad Phi` at `x` into `grad` (3 per free point) and, when `values` is given, the
     /// Newton matrix's lower triangle into it.
     fn assemble(
-        &self,
+        &mut self,
         x: &[Vec3],
         y: &[Vec3],
         col_ptr: &[usize],
@@ -484,6 +486,14 @@ impl Problem<'_> {
                 }
             }
         }
+        // The lengths first, in a pass of their own: its square roots and divisions do not wait
+        // on each other, while in the pass below each spring's would wait on the last one's
+        // additions to the matrix.
+        self.lengths.clear();
+        self.lengths.extend(self.mesh.springs().iter().map(|s| {
+            let len = (x[s.b as usize] - x[s.a as usize]).norm();
+            (len, 1.0 / len)
+        }));
         for (i, s) in self.mesh.springs().iter().enumerate() {
             let law = self.law(i);
             if law.k == 0.0 && law.rho == 0.0 {
@@ -495,14 +505,15 @@ impl Problem<'_> {
                 continue;
             }
             let d = x[b] - x[a];
-            let len = d.norm();
+            let (len, inv) = self.lengths[i];
             // NOTE: coincident ends have no direction; the energy is not differentiable there
             // and the spring is skipped for this iteration (the mass term keeps H definite).
             if len == 0.0 {
                 continue;
             }
-            let u = d / len;
-            let f = u * law.tension(len);
+            let u = d * inv;
+            let (tension, along) = law.tension_and_stiffness(len);
+            let f = u * tension;
             // dE/dx_b = T u, dE/dx_a = -T u.
             if fb != NONE {
                 add3(grad, fb as usize, &f);
@@ -513,35 +524,52 @@ impl Problem<'_> {
             let Some(v) = values.as_deref_mut() else {
                 continue;
             };
-            let (along, across) = law.hessian(len);
-            let mut k = [[0.0; 3]; 3];
-            for (r, row) in k.iter_mut().enumerate() {
-                for (c, e) in row.iter_mut().enumerate() {
-                    let uu = u[r] * u[c];
-                    let id = if r == c { 1.0 } else { 0.0 };
-                    *e = along * uu + across * (id - uu);
-                }
-            }
+            // The spring's block, `along u u^T + across (I - u u^T)` with `along = d^2E/dl^2`
+            // and `across = max(0, T / l)`, by its lower triangle.
+            // NOTE: the exact `across` is `T / l`, negative under compression (`l < L`), which
+            // makes the Hessian indefinite; clamping it at 0 keeps the Newton matrix positive
+            // definite (the mass term then makes it strictly so) at the price of a slower, still
+            // descending, step for compressed springs.
+            let across = (tension * inv).max(0.0);
+            let w = along - across;
+            let (k00, k11, k22) = (
+                across + w * u.x * u.x,
+                across + w * u.y * u.y,
+                across + w * u.z * u.z,
+            );
+            let (k10, k20, k21) = (w * u.y * u.x, w * u.z * u.x, w * u.z * u.y);
             for fr in [fa, fb] {
                 if fr == NONE {
                     continue;
                 }
-                let f = fr as usize;
-                for c in 0..3 {
-                    for r in c..3 {
-                        v[col_ptr[3 * f + c] + (r - c)] += k[r][c];
-                    }
-                }
+                let f = 3 * fr as usize;
+                let (c0, c1, c2) = (col_ptr[f], col_ptr[f + 1], col_ptr[f + 2]);
+                v[c0] += k00;
+                v[c0 + 1] += k10;
+                v[c0 + 2] += k20;
+                v[c1] += k11;
+                v[c1 + 1] += k21;
+                v[c2] += k22;
             }
             let slot = topo.spring_slot[i];
             if slot != NONE {
-                let lo = fa.min(fb) as usize;
-                for c in 0..3 {
-                    let base = col_ptr[3 * lo + c] + (3 - c) + 3 * slot as usize;
-                    for r in 0..3 {
-                        v[base + r] -= k[r][c];
-                    }
-                }
+                // The off-diagonal block is `-K`, symmetric, so column `c` holds `-K`'s row `c`.
+                let lo = 3 * fa.min(fb) as usize;
+                let t = 3 * slot as usize;
+                let (b0, b1, b2) = (
+                    col_ptr[lo] + 3 + t,
+                    col_ptr[lo + 1] + 2 + t,
+                    col_ptr[lo + 2] + 1 + t,
+                );
+                v[b0] -= k00;
+                v[b0 + 1] -= k10;
+                v[b0 + 2] -= k20;
+                v[b1] -= k10;
+                v[b1 + 1] -= k11;
+                v[b1 + 2] -= k21;
+                v[b2] -= k20;
+                v[b2 + 1] -= k21;
+                v[b2 + 2] -= k22;
             }
         }
     }
@@ -816,6 +844,7 @@ impl Solver for ImplicitEuler {
                 .collect(),
             inertia,
             weight: params.gravity * mass,
+            lengths: Vec::new(),
         };
 
         inertial_prediction(mesh, state, c * h, &mut self.y);
@@ -849,7 +878,7 @@ impl Solver for ImplicitEuler {
         self.overshoot.resize(mesh.springs().len(), f64::INFINITY);
         loop {
             let solve = newton(
-                &problem,
+                &mut problem,
                 &mut linear,
                 &mut self.x,
                 &self.y,
@@ -970,7 +999,7 @@ struct Solve {
 /// # Errors
 /// A factorisation or solve failed.
 fn newton(
-    problem: &Problem<'_>,
+    problem: &mut Problem<'_>,
     lin: &mut Linear<'_>,
     x: &mut Vec<Vec3>,
     y: &[Vec3],
@@ -1108,6 +1137,7 @@ mod tests {
                 .collect(),
             inertia: mass * (1.0 + params.drag_rate() * h) / (h * h),
             weight: params.gravity * mass,
+            lengths: Vec::new(),
         }
     }
 
@@ -1119,7 +1149,7 @@ mod tests {
         let (mesh, x) = deformed(1.15, 1.05, 5e-4);
         let params = StepParams::default();
         let topo = Topology::new(&mesh);
-        let p = problem(&mesh, &topo, &params);
+        let mut p = problem(&mesh, &topo, &params);
         let (col_ptr, row_idx) = topo.block_pattern();
         let n = 3 * topo.free();
         let y = mesh.start_positions().to_vec();
@@ -1151,7 +1181,7 @@ mod tests {
         let (mesh, x) = deformed(1.15, 1.05, 5e-4);
         let params = StepParams::default();
         let topo = Topology::new(&mesh);
-        let p = problem(&mesh, &topo, &params);
+        let mut p = problem(&mesh, &topo, &params);
         for (s, law) in mesh.springs().iter().zip(&p.laws) {
             let len = (x[s.b as usize] - x[s.a as usize]).norm();
             assert!(len > s.rest, "{s:?} is compressed");
@@ -1214,7 +1244,7 @@ mod tests {
             ..StepParams::default()
         };
         let topo = Topology::new(&mesh);
-        let p = problem(&mesh, &topo, &params);
+        let mut p = problem(&mesh, &topo, &params);
         let (col_ptr, row_idx) = topo.block_pattern();
         let mut values = vec![0.0; row_idx.len()];
         let mut grad = vec![0.0; 3 * topo.free()];

@@ -113,23 +113,19 @@ impl SpringLaw {
         spring + limit
     }
 
-    /// Tension `dE/dl`, N (positive when the spring pulls its ends together).
-    pub(crate) fn tension(self, len: f64) -> f64 {
-        self.k * (len - self.rest) + self.limit_force(len)
-    }
-
-    /// The Hessian block with respect to the spring vector `d`, as `along u u^T + across
-    /// (I - u u^T)`: `along = d^2E/dl^2`, `across = max(0, T / l)` with `T` the tension.
-    ///
-    /// NOTE: the exact `across` is `T / l`, negative under compression (`l < L`), which makes
-    /// the Hessian indefinite; clamping it at 0 keeps the Newton matrix positive definite (the
-    /// mass term then makes it strictly so) at the price of a slower, still descending, step
-    /// for compressed springs.
-    pub(crate) fn hessian(self, len: f64) -> (f64, f64) {
-        let active = self.rho > 0.0 && self.offset + self.rho * self.over(len) > 0.0;
-        let along = self.k + if active { self.rho } else { 0.0 };
-        let across = (self.tension(len) / len).max(0.0);
-        (along, across)
+    /// Tension `dE/dl`, N (positive when the spring pulls its ends together), and the
+    /// stiffness `d^2E/dl^2`, N/m, at length `len`.
+    pub(crate) fn tension_and_stiffness(self, len: f64) -> (f64, f64) {
+        let spring = self.k * (len - self.rest);
+        if self.rho == 0.0 {
+            return (spring, self.k);
+        }
+        let limit = self.offset + self.rho * self.over(len);
+        if limit > 0.0 {
+            (spring + limit, self.k + self.rho)
+        } else {
+            (spring, self.k)
+        }
     }
 }
 
@@ -158,10 +154,13 @@ mod tests {
         // a relative 1e-6 can only fail on a wrong derivative.
         let step = 1e-9;
         for len in [0.015, 0.021, 0.0225, 0.03] {
+            let (tension, stiffness) = law.tension_and_stiffness(len);
             let t = (law.energy(len + step) - law.energy(len - step)) / (2.0 * step);
-            assert!((t - law.tension(len)).abs() <= 1e-6 * law.tension(len).abs().max(1.0));
-            let s = (law.tension(len + step) - law.tension(len - step)) / (2.0 * step);
-            assert!((s - law.hessian(len).0).abs() <= 1e-6 * s.abs());
+            assert!((t - tension).abs() <= 1e-6 * tension.abs().max(1.0));
+            let s = (law.tension_and_stiffness(len + step).0
+                - law.tension_and_stiffness(len - step).0)
+                / (2.0 * step);
+            assert!((s - stiffness).abs() <= 1e-6 * s.abs());
         }
     }
 }
