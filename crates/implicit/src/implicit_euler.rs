@@ -187,13 +187,13 @@ pub const LIMIT_TOLERANCE: f64 = 0.001;
 const RESTING_SPEED: f64 = 1e-3;
 
 /// A spring's limit penalty grows by this factor after a multiplier update that did not take
-/// its error down to [`OVERSHOOT_DECREASE`] of the last one (Bertsekas' rule), and every
+/// its error down to [`ERROR_DECREASE`] of the last one (Bertsekas' rule), and every
 /// spring's for the next step after a step whose Newton solve did not converge.
 const PENALTY_GROWTH: f64 = 10.0;
 
-/// The fraction of its last overshoot a multiplier update must leave a spring for its penalty
-/// to stay.
-const OVERSHOOT_DECREASE: f64 = 0.25;
+/// The fraction of its last error (see [`SLACK_SHARE`]) a multiplier update must leave a
+/// spring for its penalty to stay.
+const ERROR_DECREASE: f64 = 0.25;
 
 /// A spring's penalty grows only while its error (see [`SLACK_SHARE`]) is over this share of
 /// [`LIMIT_TOLERANCE`]: a spring well inside the tolerance needs no stiffer penalty, and one
@@ -271,9 +271,10 @@ pub struct ImplicitEuler {
     lambda_before: Vec<f64>,
     /// The factor on the limit's least penalty for the next step.
     stiffening: f64,
-    /// Each spring's overshoot over the limit after the last multiplier update, as a share of
-    /// its rest length (Bertsekas' rule compares the next one with it).
-    overshoot: Vec<f64>,
+    /// Each spring's error after the last multiplier update, as a share of its rest length: how
+    /// far it is past the limit, or a tensed spring's shortfall over [`SLACK_SHARE`]
+    /// (Bertsekas' rule compares the next one with it).
+    limit_error: Vec<f64>,
     /// The colliders with their friction retimed to the step.
     colliders: Vec<Collider>,
     hash: SpatialHash,
@@ -339,7 +340,7 @@ impl ImplicitEuler {
             lambda: Vec::new(),
             lambda_before: Vec::new(),
             stiffening: 1.0,
-            overshoot: Vec::new(),
+            limit_error: Vec::new(),
             colliders: Vec::new(),
             hash: SpatialHash::default(),
         }
@@ -379,7 +380,7 @@ impl ImplicitEuler {
         let factor = 8 * (9 * scalar_factor).saturating_sub(3 * n);
         let workspace = factor / 4;
         // grad, rhs and the four conjugate-gradient vectors (3 per free point); y, x and trial
-        // (3 per point); the limit's multipliers of the last two steps, the overshoots, the
+        // (3 per point); the limit's multipliers of the last two steps, the errors, the
         // laws and the lengths (two, one, four and two per spring).
         let scratch = 8 * (6 * 3 * n + 9 * mesh.len() as u64 + 9 * mesh.springs().len() as u64);
         topo.bytes() + pattern + values + factor + workspace + scratch
@@ -873,9 +874,9 @@ impl Solver for ImplicitEuler {
         let mut residual;
         let mut unconverged = false;
         let mut updates = 0;
-        // Each spring's overshoot after the last multiplier update (none yet).
-        self.overshoot.clear();
-        self.overshoot.resize(mesh.springs().len(), f64::INFINITY);
+        // Each spring's error after the last multiplier update (none yet).
+        self.limit_error.clear();
+        self.limit_error.resize(mesh.springs().len(), f64::INFINITY);
         loop {
             let solve = newton(
                 &mut problem,
@@ -904,7 +905,7 @@ impl Solver for ImplicitEuler {
                 .iter()
                 .zip(problem.laws.iter_mut())
                 .zip(self.lambda.iter_mut())
-                .zip(self.overshoot.iter_mut())
+                .zip(self.limit_error.iter_mut())
             {
                 let len = (self.x[s.b as usize] - self.x[s.a as usize]).norm();
                 *lambda = law.limit_force(len);
@@ -920,7 +921,7 @@ impl Solver for ImplicitEuler {
                 };
                 largest = largest.max(error);
                 soft_left |= error > limit_tolerance && law.rho < k_lim;
-                if error > RAISE_SHARE * limit_tolerance && error > OVERSHOOT_DECREASE * *before {
+                if error > RAISE_SHARE * limit_tolerance && error > ERROR_DECREASE * *before {
                     law.rho = (PENALTY_GROWTH * law.rho).min(k_lim);
                 }
                 *before = error.max(0.0);
