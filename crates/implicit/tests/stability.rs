@@ -461,8 +461,8 @@ fn fast_implicit_is_finite_and_settles_on_every_scene_step_count_and_switch() {
 }
 
 #[test]
-#[ignore = "long (release: hours; a case at 30 steps per frame with the limit on takes about 25 \
-            minutes), and its outcome on every scene is open"]
+#[ignore = "long (release: hours; a case at 10 or 30 steps per frame with the limit on takes \
+            three to five minutes), and its outcome on every scene is open"]
 fn implicit_is_finite_and_settles_on_every_scene_step_count_and_switch() {
     every_scene_at(&[1, 2, 5, 10, 30], &["implicit"]);
 }
