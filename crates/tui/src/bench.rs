@@ -9,7 +9,7 @@
 //!
 //! Each configuration is the course's `pinned4` cloth scaled to `--grid N` points per side at the
 //! standard spacing ([`cloth_bench::pinned_grid`]), with `pinned4`'s parameters as `--set`
-//! changes them, warmed up for `--warmup` frames (one simulated second by default), then timed
+//! changes them, warmed up for `--warmup` frames (90, one simulated second, by default), then timed
 //! by [`cloth_bench::time_frames`], or with `--interleave` frame by frame in turn with the
 //! grid's other configurations by [`cloth_bench::time_interleaved_each`]. Any registered
 //! solver can be timed by name, each at its recommended steps per frame unless `--steps` sets
@@ -68,8 +68,9 @@ pub struct Args {
     /// steps `--steps`').
     #[arg(long = "set", value_name = "KEY=VALUE")]
     sets: Vec<String>,
-    /// Frames simulated before the timing starts (default: one simulated second, so the cloth
-    /// has fallen and come into tension; 0 times the run from the flat start).
+    /// Frames simulated before the timing starts (default 90: one simulated second at the
+    /// course's 90 frames per second, so the cloth has fallen and come into tension; 0 times the
+    /// run from the flat start).
     #[arg(long, value_name = "FRAMES", default_value_t = 90, value_parser = clap::value_parser!(u32).range(0..=100_000))]
     warmup: u32,
     /// Frames timed per configuration (after the warm-up).
