@@ -641,8 +641,7 @@ fn implicit_takes_over_near_the_bottom_of_the_fall_without_gaining_energy_the_fa
     // that excess stretch into motion (up to about 40 J); after it the cloth swings on the
     // energy it has, so no later frame may have more kinetic energy than that first frame or
     // than Verlet's own cloth from the swap on. A limit whose multipliers leave tension on
-    // springs the motion has slackened holds the cloth up and lets it spring back: it reached
-    // 66 and 71 J in the two frames after a swap at frame 31.
+    // springs the motion has slackened holds the cloth up and lets it spring back above that.
     let scene = load("pinned4");
     let (states, _) = verlet_fall(&scene);
     let mass = scene.mesh.point_mass(scene.params.density);
