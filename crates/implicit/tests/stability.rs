@@ -638,9 +638,9 @@ fn implicit_takes_over_near_the_bottom_of_the_fall_without_gaining_energy_the_fa
     // Around frame 30 Verlet's pinned4 is caught by its springs at the bottom of its fall and
     // rebounds, its kinetic energy never above 28.5 J from there on, with the course's sweep
     // leaving springs up to ~1.17 rest. Taken over there, the Newton step's first frame turns
-    // that excess stretch into motion (up to about 40 J); after it the cloth swings on the
-    // energy it has, so no later frame may have more kinetic energy than that first frame or
-    // than Verlet's own cloth from the swap on. A limit whose multipliers leave tension on
+    // that excess stretch into motion; after it the cloth swings on the energy it has, so no
+    // later frame may have more kinetic energy than that first frame or than Verlet's own
+    // cloth from the swap on. A limit whose multipliers leave tension on
     // springs the motion has slackened holds the cloth up and lets it spring back above that.
     let scene = load("pinned4");
     let (states, _) = verlet_fall(&scene);
