@@ -1,8 +1,11 @@
 //! What both implicit solvers do around their solve: the inertial prediction before it, and
-//! after it the commit of the new positions and the collisions, exactly as Verlet does them.
+//! after it the commit of the new positions, self-collision as Verlet does it and the
+//! collision objects with their friction as a drag ([`Contacts`]).
 
 use cloth_mesh::{ClothMesh, ClothState, Vec3};
-use cloth_solver::{Collider, SolveError, SpatialHash, StepParams, apply_colliders};
+use cloth_solver::{Collider, SolveError, SpatialHash, StepParams};
+
+use crate::contact::Contacts;
 
 /// Writes the damped inertial prediction `y = x0 + h v0 / (1 + c h)`, with the velocity
 /// `v0 = (x0 - last) / h` of `state`, into `y`: `x0 + (x0 - last) / (1 + c h)`. Pinned points
@@ -24,6 +27,32 @@ pub(crate) fn inertial_prediction(
     );
 }
 
+/// Finds the points of `state` resting on `colliders` (with the prediction `y` of drag `c h`
+/// from [`inertial_prediction`]) and adds their friction's drag to their prediction: `y = x0 +
+/// (x0 - last) / (1 + (c + c_f) h)` (see [`Contacts`]).
+pub(crate) fn contact_prediction(
+    mesh: &ClothMesh,
+    colliders: &[Collider],
+    params: &StepParams,
+    state: &ClothState,
+    ch: f64,
+    y: &mut [Vec3],
+    contacts: &mut Contacts,
+) {
+    contacts.find(mesh, colliders, params, state, y);
+    let h = params.dt();
+    for (((y, &rate), &p), &l) in y
+        .iter_mut()
+        .zip(contacts.rates())
+        .zip(&state.positions)
+        .zip(&state.last)
+    {
+        if rate > 0.0 {
+            *y = p + (p - l) / (1.0 + ch + rate * h);
+        }
+    }
+}
+
 /// The step under an infinite drag (damping 100 %, where [`StepParams::drag_rate`] is
 /// infinite): the velocity is removed and the free points stay where they are, which is the
 /// limit of the backward-Euler step `x1 = x0 + h v1` with `v1 = (v0 + h F / m) / (1 + c h)` as
@@ -37,24 +66,26 @@ pub(crate) fn hold_still(
     colliders: &[Collider],
     params: &StepParams,
     state: &mut ClothState,
+    contacts: &mut Contacts,
     hash: &mut SpatialHash,
 ) -> Result<(), SolveError> {
     let x = state.positions.clone();
+    contacts.find(mesh, colliders, params, state, &x);
     let free: Vec<u32> = (0..mesh.len() as u32)
         .filter(|&i| !mesh.pinned()[i as usize])
         .collect();
-    commit(mesh, colliders, params, state, &free, &x, hash)
+    commit(mesh, contacts, params, state, &free, &x, hash)
 }
 
 /// Moves the free points to `x` with `last` at their start-of-step positions (so
-/// `(positions - last) / h` is the new velocity), then applies self-collision and the collision
-/// objects as Verlet does, and checks the result.
+/// `(positions - last) / h` is the new velocity), then applies self-collision as Verlet does
+/// and the collision objects of `contacts` ([`Contacts::resolve`]), and checks the result.
 ///
 /// # Errors
 /// [`SolveError::NonFinite`] for the first non-finite point.
 pub(crate) fn commit(
     mesh: &ClothMesh,
-    colliders: &[Collider],
+    contacts: &Contacts,
     params: &StepParams,
     state: &mut ClothState,
     free_points: &[u32],
@@ -74,7 +105,7 @@ pub(crate) fn commit(
     if params.self_collision {
         hash.resolve(mesh, &mut state.positions, params.steps_per_frame);
     }
-    apply_colliders(colliders, mesh.pinned(), &mut state.positions, &state.last);
+    contacts.resolve(mesh.pinned(), &mut state.positions, &state.last);
     match state.first_non_finite() {
         Some(i) => Err(SolveError::non_finite(mesh, i)),
         None => Ok(()),

@@ -64,18 +64,18 @@
 //! before the tolerance (a cloth whose steps converge needs no raise) and whose jitter has stalled
 //! (above 1 mm/s and above 0.6 of the window's before: a jitter that falls faster settles at the
 //! weight it has, where the slack springs converge freely), with no spring more than 1 % over the
-//! limit and no point touching a collision object (friction holds such a cloth's springs where the
-//! solve leaves them, and a stiffer limit would only fight the friction), raises the weight
-//! tenfold, at most three times (one refactorisation each); the multipliers are rescaled so that
-//! the tensions they stand for are kept. Each level is measured for two windows before it is raised
-//! again or judged: a raise after which the second window's jitter exceeds the jitter of the window
-//! before it is undone, and the level held until the cloth moves again. A window faster than 6
-//! cm/s, a step that starts with a point faster than 0.5 m/s, the limit switched off or
-//! [`Solver::reset`] return the weight to its least value (the cache, like the multipliers, is the
-//! solver's own: a swap starts afresh). While a raise is being judged only the windows count: the
-//! raise itself moves a few points fast for a step or two as the tensions it converges
-//! redistribute; a window faster than 6 cm/s then returns the weight to its least value and holds
-//! it there until a later window moves again.
+//! limit and no point within [`CONTACT_DISTANCE`](crate::CONTACT_DISTANCE) of a collision object
+//! (friction holds such a cloth's springs where the solve leaves them, and a stiffer limit would
+//! only fight the friction), raises the weight tenfold, at most three times (one refactorisation
+//! each); the multipliers are rescaled so that the tensions they stand for are kept. Each level is
+//! measured for two windows before it is raised again or judged: a raise after which the second
+//! window's jitter exceeds the jitter of the window before it is undone, and the level held until
+//! the cloth moves again. A window faster than 6 cm/s, a step that starts with a point faster than
+//! 0.5 m/s, the limit switched off or [`Solver::reset`] return the weight to its least value (the
+//! cache, like the multipliers, is the solver's own: a swap starts afresh). While a raise is being
+//! judged only the windows count: the raise itself moves a few points fast for a step or two as the
+//! tensions it converges redistribute; a window faster than 6 cm/s then returns the weight to its
+//! least value and holds it there until a later window moves again.
 //!
 //! NOTE: the multiplier is a vector fixed in space, not a length along the spring's current
 //! direction. A binding spring's tension is `w_s |u_s|`; where it exceeds `w_s 1.1 L_s` the
@@ -107,11 +107,14 @@
 //!
 //! # Collisions
 //!
-//! After the solve the collisions are applied as Verlet applies them, with each object's
-//! friction retimed to the step: the course's friction removes its share of a colliding point's
-//! displacement once per step of its 30 per frame, so at one step per frame it is applied as
-//! `1 - (1 - f)^30` (the same reading of a per-step constant as a rate that turns the course's
-//! damping into a drag rate). Otherwise a cloth that Verlet holds on a sphere slides off it.
+//! The friction of a collision object is a drag on the points resting on it, inside the step:
+//! such a point's mass term is `m (1 + (c + c_f) h) / h^2`, with its own prediction, so the
+//! matrix's diagonal holds it and is refactored when the set of resting points changes (a
+//! cloth at rest on an object keeps the same set). After the solve, self-collision is applied
+//! as Verlet applies it, and the collision objects push points out of them: the resting points
+//! without friction, a point that reaches an object during the step with one step's drag. The
+//! crate's documentation ([Friction](crate#friction)) gives the drag rate `c_f` that stands for
+//! the course's per-step friction, and why the course's friction after a large step cannot.
 //!
 //! # Damping
 //!
@@ -128,9 +131,9 @@ use cloth_solver::{
 };
 
 use crate::cholesky::Cholesky;
-use crate::commit::{commit, hold_still, inertial_prediction};
+use crate::commit::{commit, contact_prediction, hold_still, inertial_prediction};
+use crate::contact::{Contacts, touches};
 use crate::memory::{Allocation, try_filled};
-use crate::retime::retime_friction;
 use crate::topology::{NONE, Topology};
 
 /// By default the local/global iterations of a step stop once a global step moves no point
@@ -160,13 +163,6 @@ const MOVING_WINDOW_SPEED: f64 = 0.06;
 /// share of it: a spring far past it is one the solve cannot bring back (held by friction on a
 /// collision object), and a stiffer limit would only pull it harder.
 const RAISE_OVERSHOOT: f64 = 0.01;
-
-/// A free point this near a collision object's surface, m, touches it, and the limit's
-/// penalty is not raised: friction holds such a cloth's springs where the solve leaves them,
-/// so a stiffer limit fights the friction rather than converging a chain (see
-/// [`RAISE_OVERSHOOT`]). Ten times the course's surface offset: a point resting on a surface
-/// keeps within one offset of it, and the bundled scenes' springs are some 20 times longer.
-const CONTACT_DISTANCE: f64 = 1e-3;
 
 /// A window whose jitter (root-mean-square step speed) stays above this share of the window's
 /// before has stalled: converging at that rate, a jitter of centimetres per second would
@@ -240,8 +236,11 @@ pub struct FastImplicit {
     windows_at_level: u32,
     /// Whether a raise was undone, which holds the level until the cloth moves again.
     held: bool,
-    /// The colliders with their friction retimed to the step.
-    colliders: Vec<Collider>,
+    /// The points resting on collision objects, and the colliders that finish a step.
+    contacts: Contacts,
+    /// Per point, its mass term `m (1 + (c + c_f) h) / h^2`, N/m, with the drag of the friction
+    /// it rests on.
+    point_inertia: Vec<f64>,
     hash: SpatialHash,
 }
 
@@ -268,6 +267,8 @@ struct System {
     col_ptr: Vec<usize>,
     values: Vec<f64>,
     key: Option<MatrixKey>,
+    /// The free points' mass terms the factor was computed with.
+    inertia: Vec<f64>,
 }
 
 const KINDS: [SpringKind; 3] = [
@@ -306,7 +307,8 @@ impl FastImplicit {
             raised_from: None,
             windows_at_level: 0,
             held: false,
-            colliders: Vec::new(),
+            contacts: Contacts::default(),
+            point_inertia: Vec::new(),
             hash: SpatialHash::default(),
         }
     }
@@ -464,6 +466,8 @@ impl FastImplicit {
 
     /// Makes sure the topology, the symbolic factor and the numeric factor describe `mesh` and
     /// the current parameters.
+    /// `inertia` is the mass term of a point that rests on nothing, which the limit's weight
+    /// is set by; each point's own is in `point_inertia`.
     fn prepare(
         &mut self,
         mesh: &ClothMesh,
@@ -484,6 +488,7 @@ impl FastImplicit {
                 col_ptr,
                 values,
                 key: None,
+                inertia: Vec::new(),
             });
         }
         if self.mu.len() != mesh.springs().len() {
@@ -503,15 +508,28 @@ impl FastImplicit {
             limit: params.stretch_limit,
             level: self.level,
         };
-        if sys.key == Some(key) {
+        let topo = &sys.topo;
+        let point_inertia = &self.point_inertia;
+        // NOTE: compared by value: the points resting on a collision object change the
+        // diagonal, and a cloth at rest keeps the same ones from step to step.
+        if sys.key == Some(key)
+            && sys.inertia.len() == topo.free()
+            && topo
+                .free_points
+                .iter()
+                .zip(&sys.inertia)
+                .all(|(&p, &m)| point_inertia[p as usize].to_bits() == m.to_bits())
+        {
             return Ok(());
         }
         sys.key = None;
-        let topo = &sys.topo;
+        sys.inertia.clear();
+        sys.inertia
+            .extend(topo.free_points.iter().map(|&p| point_inertia[p as usize]));
         let v = &mut sys.values;
         v.fill(0.0);
-        for f in 0..topo.free() {
-            v[sys.col_ptr[f]] = inertia;
+        for (f, &m) in sys.inertia.iter().enumerate() {
+            v[sys.col_ptr[f]] = m;
         }
         for (s, &slot) in mesh.springs().iter().zip(&topo.spring_slot) {
             let k = spring_weight(params, s.kind, inertia, self.level);
@@ -589,7 +607,14 @@ impl Solver for FastImplicit {
         let mass = mesh.point_mass(params.density);
         let inertia = mass * (1.0 + c * h) / (h * h);
         if !inertia.is_finite() {
-            hold_still(mesh, colliders, params, state, &mut self.hash)?;
+            hold_still(
+                mesh,
+                colliders,
+                params,
+                state,
+                &mut self.contacts,
+                &mut self.hash,
+            )?;
             return Ok(StepReport::default());
         }
         if !params.stretch_limit {
@@ -603,6 +628,23 @@ impl Solver for FastImplicit {
         {
             self.release();
         }
+        inertial_prediction(mesh, state, c * h, &mut self.y);
+        contact_prediction(
+            mesh,
+            colliders,
+            params,
+            state,
+            c * h,
+            &mut self.y,
+            &mut self.contacts,
+        );
+        self.point_inertia.clear();
+        self.point_inertia.extend(
+            self.contacts
+                .rates()
+                .iter()
+                .map(|&rate| inertia + mass * rate / h),
+        );
         self.prepare(mesh, params, inertia)?;
         let max_iterations = self.iterations;
         let Some(sys) = self.system.as_mut() else {
@@ -622,13 +664,18 @@ impl Solver for FastImplicit {
             }
         });
 
-        inertial_prediction(mesh, state, c * h, &mut self.y);
         // NOTE: the iterations only ever lower the incremental potential from their start, so
         // they start from whichever of the prediction and the step's start has the lower one:
         // then even a truncated step ends with an energy no higher than the start's (see the
         // module doc).
-        let (at_start, at_prediction) =
-            potentials(mesh, params, inertia, weight, &state.positions, &self.y);
+        let (at_start, at_prediction) = potentials(
+            mesh,
+            params,
+            &self.point_inertia,
+            weight,
+            &state.positions,
+            &self.y,
+        );
         if at_start < at_prediction {
             self.x.clone_from(&state.positions);
         } else {
@@ -643,7 +690,7 @@ impl Solver for FastImplicit {
             iterations += 1;
             // Local step (and the limit's multiplier update) and right-hand side together.
             for (f, &p) in topo.free_points.iter().enumerate() {
-                let b = self.y[p as usize] * inertia + weight;
+                let b = self.y[p as usize] * self.point_inertia[p as usize] + weight;
                 for axis in 0..3 {
                     self.rhs[axis * n + f] = b[axis];
                 }
@@ -710,10 +757,9 @@ impl Solver for FastImplicit {
             }
         }
 
-        retime_friction(colliders, params, &mut self.colliders);
         commit(
             mesh,
-            &self.colliders,
+            &self.contacts,
             params,
             state,
             &topo.free_points,
@@ -728,21 +774,6 @@ impl Solver for FastImplicit {
             residual,
         })
     }
-}
-
-/// Whether a free point lies within [`CONTACT_DISTANCE`] of a collision object's surface.
-fn touches(mesh: &ClothMesh, colliders: &[Collider], state: &ClothState) -> bool {
-    let near = |p: &Vec3| {
-        colliders.iter().any(|c| match c {
-            Collider::Sphere(s) => (p - s.origin).norm() <= s.radius + CONTACT_DISTANCE,
-            Collider::Plane(pl) => (p - pl.point).dot(&pl.normal).abs() <= CONTACT_DISTANCE,
-        })
-    };
-    state
-        .positions
-        .iter()
-        .zip(mesh.pinned())
-        .any(|(p, &pinned)| !pinned && near(p))
 }
 
 /// The largest distance, m, a free point moved over the last step (`positions - last`).
@@ -764,13 +795,13 @@ fn fastest_point(mesh: &ClothMesh, state: &ClothState) -> f64 {
 fn potentials(
     mesh: &ClothMesh,
     params: &StepParams,
-    inertia: f64,
+    inertia: &[f64],
     weight: Vec3,
     x0: &[Vec3],
     y: &[Vec3],
 ) -> (f64, f64) {
     let (mut at_start, mut at_prediction) = (0.0, 0.0);
-    for ((a, b), &pinned) in x0.iter().zip(y).zip(mesh.pinned()) {
+    for (((a, b), &pinned), &inertia) in x0.iter().zip(y).zip(mesh.pinned()).zip(inertia) {
         if !pinned {
             at_start += 0.5 * inertia * (a - b).norm_squared() - weight.dot(a);
             at_prediction -= weight.dot(b);

@@ -95,11 +95,14 @@
 //! ends on the stiff spring, whose rest state the multipliers need not reach, while a moving cloth
 //! keeps the soft penalty that lets the factor be reused.
 //!
-//! After the solve, self-collision and the collision objects are applied as in
-//! [`cloth_solver::Verlet`], with each object's friction retimed to the step as fast-implicit
-//! does (the course's per-step friction applied as the share that its thirty steps a frame
-//! remove, see [`FastImplicit`](crate::FastImplicit)), and `last` is set to the start-of-step
-//! positions, so that `(positions - last) / h` is the new velocity.
+//! The friction of a collision object is a drag on the points resting on it at the start of the
+//! step, inside `Phi`: such a point's mass term is `m (1 + (c + c_f) h) / h^2`, with its own
+//! prediction ([Friction](crate#friction) in the crate's documentation gives the rate `c_f`
+//! that stands for the course's per-step friction, and why the course's friction after a large
+//! step cannot). After the solve, self-collision is applied as in [`cloth_solver::Verlet`] and
+//! the collision objects push points out of them (the resting points without friction, a point
+//! that reaches an object during the step with one step's drag), and `last` is set to the
+//! start-of-step positions, so that `(positions - last) / h` is the new velocity.
 //!
 //! # Velocity and solver swaps
 //!
@@ -136,9 +139,9 @@ use cloth_mesh::{ClothMesh, ClothState, MAX_STRETCH, Vec3};
 use cloth_solver::{Collider, SolveError, Solver, SpatialHash, StepParams, StepReport};
 
 use crate::cholesky::{AnyCholesky, Cholesky};
-use crate::commit::{commit, hold_still, inertial_prediction};
+use crate::commit::{commit, contact_prediction, hold_still, inertial_prediction};
+use crate::contact::Contacts;
 use crate::memory::{Allocation, check_available, try_filled};
-use crate::retime::retime_friction;
 use crate::spring_energy::{SpringLaw, limit_penalty, limiter_stiffness};
 use crate::topology::{NONE, Topology};
 
@@ -275,8 +278,11 @@ pub struct ImplicitEuler {
     /// far it is past the limit, or a tensed spring's shortfall over [`SLACK_SHARE`]
     /// (Bertsekas' rule compares the next one with it).
     limit_error: Vec<f64>,
-    /// The colliders with their friction retimed to the step.
-    colliders: Vec<Collider>,
+    /// The points resting on collision objects, and the colliders that finish a step.
+    contacts: Contacts,
+    /// Per point, its mass term with the drag of the friction it rests on (scratch lent to
+    /// each step's [`Problem`]).
+    point_inertia: Vec<f64>,
     hash: SpatialHash,
 }
 
@@ -301,8 +307,12 @@ struct Problem<'a> {
     mesh: &'a ClothMesh,
     topo: &'a Topology,
     laws: Vec<SpringLaw>,
-    /// `m (1 + c h) / h^2`, N/m.
+    /// `m (1 + c h) / h^2`, N/m: the mass term of a point that rests on nothing, the least
+    /// of them.
     inertia: f64,
+    /// Per point, `m (1 + (c + c_f) h) / h^2`, N/m, with the drag rate `c_f` of the friction
+    /// it rests on ([`Contacts`]).
+    point_inertia: Vec<f64>,
     /// `m g`, N.
     weight: Vec3,
     /// Scratch of [`Problem::assemble`]: each spring's length, m, and its inverse.
@@ -341,7 +351,8 @@ impl ImplicitEuler {
             lambda_before: Vec::new(),
             stiffening: 1.0,
             limit_error: Vec::new(),
-            colliders: Vec::new(),
+            contacts: Contacts::default(),
+            point_inertia: Vec::new(),
             hash: SpatialHash::default(),
         }
     }
@@ -451,7 +462,7 @@ impl Problem<'_> {
         let mut phi = 0.0;
         for &p in &self.topo.free_points {
             let dx = x[p as usize] - y[p as usize];
-            phi += 0.5 * self.inertia * dx.norm_squared() - self.weight.dot(&dx);
+            phi += 0.5 * self.point_inertia[p as usize] * dx.norm_squared() - self.weight.dot(&dx);
         }
         for (i, s) in self.mesh.springs().iter().enumerate() {
             let law = self.law(i);
@@ -479,11 +490,12 @@ impl Problem<'_> {
             v.fill(0.0);
         }
         for (f, &p) in topo.free_points.iter().enumerate() {
-            let g = (x[p as usize] - y[p as usize]) * self.inertia - self.weight;
+            let inertia = self.point_inertia[p as usize];
+            let g = (x[p as usize] - y[p as usize]) * inertia - self.weight;
             grad[3 * f..3 * f + 3].copy_from_slice(g.as_slice());
             if let Some(v) = values.as_deref_mut() {
                 for c in 0..3 {
-                    v[col_ptr[3 * f + c]] += self.inertia;
+                    v[col_ptr[3 * f + c]] += inertia;
                 }
             }
         }
@@ -734,7 +746,14 @@ impl Solver for ImplicitEuler {
         let mass = mesh.point_mass(params.density);
         let inertia = mass * (1.0 + c * h) / (h * h);
         if !inertia.is_finite() {
-            hold_still(mesh, colliders, params, state, &mut self.hash)?;
+            hold_still(
+                mesh,
+                colliders,
+                params,
+                state,
+                &mut self.contacts,
+                &mut self.hash,
+            )?;
             return Ok(StepReport::default());
         }
         let (k_lim, base) = if params.stretch_limit {
@@ -786,6 +805,24 @@ impl Solver for ImplicitEuler {
             self.lambda_before.clear();
         }
         extrapolate_multipliers(&mut self.lambda, &mut self.lambda_before);
+        inertial_prediction(mesh, state, c * h, &mut self.y);
+        contact_prediction(
+            mesh,
+            colliders,
+            params,
+            state,
+            c * h,
+            &mut self.y,
+            &mut self.contacts,
+        );
+        let mut point_inertia = std::mem::take(&mut self.point_inertia);
+        point_inertia.clear();
+        point_inertia.extend(
+            self.contacts
+                .rates()
+                .iter()
+                .map(|&rate| inertia + mass * rate / h),
+        );
         let keep = |rho: f64| if rho > 0.0 { 1.0 - rho / k_lim } else { 0.0 };
         let mut problem = Problem {
             mesh,
@@ -802,11 +839,11 @@ impl Solver for ImplicitEuler {
                 })
                 .collect(),
             inertia,
+            point_inertia,
             weight: params.gravity * mass,
             lengths: Vec::new(),
         };
 
-        inertial_prediction(mesh, state, c * h, &mut self.y);
         self.x.clone_from(&self.y);
         let n = 3 * topo.free();
         self.grad.resize(n, 0.0);
@@ -907,10 +944,10 @@ impl Solver for ImplicitEuler {
             };
         }
 
-        retime_friction(colliders, params, &mut self.colliders);
+        self.point_inertia = problem.point_inertia;
         commit(
             mesh,
-            &self.colliders,
+            &self.contacts,
             params,
             state,
             &topo.free_points,
@@ -1095,6 +1132,7 @@ mod tests {
                 })
                 .collect(),
             inertia: mass * (1.0 + params.drag_rate() * h) / (h * h),
+            point_inertia: vec![mass * (1.0 + params.drag_rate() * h) / (h * h); mesh.len()],
             weight: params.gravity * mass,
             lengths: Vec::new(),
         }

@@ -24,9 +24,43 @@
 //! [`cloth_solver::Verlet`] keeps the cloth's motion; see [`retime_velocity`] for swaps that
 //! change the step. Each states the memory it needs for a mesh (`memory_estimate`) and reports
 //! a cloth too large for the machine as an error instead of aborting.
+//!
+//! # Friction
+//!
+//! The course's friction `f` keeps `1 - f` of a point's displacement in each of its steps
+//! (`h_ref`, thirty a frame) in which the point crosses a collision object's surface. A point
+//! pressed into an object and pulled along it by a force `F` crosses at every step and slides
+//! at the speed where each step's pull is balanced by what friction takes, `(1 - f) / f * F
+//! h_ref / m`. That is a drag, `m v' = F - c_f m v`, with the rate [`friction_rate`] `c_f = f /
+//! ((1 - f) h_ref)`: it slides the point at `F / (m c_f)`, the same speed, at any step, and its
+//! backward-Euler step keeps `1 / (1 + c_f h)` of the displacement, exactly the course's `1 -
+//! f` at the course's step.
+//!
+//! The course's per-step friction applied after a large step cannot stand for that drag.
+//! Applied once a step it lets a cloth slide off the sphere that the course's holds; retimed to
+//! keep over one step what thirty keep (`(1 - f)^30`, a billionth on the plane) it glues every
+//! touching point where it was, whatever pulls it: the collision undoes the solve's move of
+//! the touching points, and stiff springs between a glued point and its free neighbours stay
+//! stretched far past the limit for good. So both solvers put the drag into the step itself,
+//! for the points that rest on an object at its start: such a point's mass term is `m (1 + (c +
+//! c_f) h) / h^2` and its prediction `y = x0 + h v0 / (1 + (c + c_f) h)`, the stationarity
+//! condition of backward Euler with that drag, so the solve moves the point together with the
+//! springs that pull it. A point rests on an object when it starts the step within
+//! [`CONTACT_DISTANCE`] of the surface and its prediction stays that near: a point lifting off
+//! faster is free, as the course's is (its friction acts only on a point that crosses the
+//! surface), while one that the collision has just put back at the surface offset, and that
+//! therefore moves away by a fraction of the offset, still rests. The drag acts on all three
+//! directions of a resting point, as the course's friction scales a point's whole
+//! displacement; the collision then removes the part that went into the object.
+//!
+//! After the solve the collision objects push points out of them as the course's collisions
+//! do: a resting point, whose friction the step has had, without friction; a point that
+//! reaches an object during the step with one step's drag on its displacement, `1 / (1 + c_f
+//! h)`, as the course applies its friction to the step in which a point crosses.
 
 mod cholesky;
 mod commit;
+mod contact;
 mod entries;
 mod fast_implicit;
 mod implicit_euler;
@@ -35,10 +69,11 @@ mod retime;
 mod spring_energy;
 mod topology;
 
+pub use contact::{CONTACT_DISTANCE, friction_rate, retime_friction};
 pub use fast_implicit::{DEFAULT_ITERATIONS, FAST_TOLERANCE, FastImplicit, limit_weight};
 pub use implicit_euler::{
     ImplicitEuler, LIMIT_TOLERANCE, MAX_LIMIT_UPDATES, MAX_NEWTON_ITERATIONS, MAX_PCG_ITERATIONS,
     NEWTON_TOLERANCE, REFACTOR_BUDGET,
 };
-pub use retime::{retime_friction, retime_velocity};
+pub use retime::retime_velocity;
 pub use spring_energy::{LIMIT_OVERSHOOT, limiter_stiffness};

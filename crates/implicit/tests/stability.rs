@@ -145,10 +145,11 @@ fn stable_verlet_steps(scene: &Scene, ks: f64) -> u32 {
 /// second of [`SETTLE_SECONDS`], measured the same way, where that is higher. The method is
 /// Verlet with the same switches at the scene's steps per frame, or at the fewest that keep it
 /// stable at `params.ks` ([`stable_verlet_steps`]); at more steps than the scene's own its
-/// per-step damping and friction are retimed to keep their rates (`1 - (1 - f)^(30 / steps)`
-/// each), as the implicit solvers retime them, so the reference is the same physical cloth: with
-/// the course's per-step damping applied 200 times a frame, a cloth at 1e6 N/m falls at 27 cm/s
-/// and is still falling onto the plane after 3.9 s.
+/// per-step damping and friction are retimed to keep the rates the implicit solvers use (the
+/// damping as `1 - e^(-c h)` with the drag rate `c`, the friction by [`retime_friction`], one
+/// step of its drag), so the reference is the same physical cloth: with the course's per-step
+/// damping applied 200 times a frame, a cloth at 1e6 N/m falls at 27 cm/s and is still falling
+/// onto the plane after 3.9 s.
 ///
 /// Why: the reference stands for the model. A scene the model itself has not brought to rest
 /// by then cannot be asked to be stiller under another integrator. selfCollision is such a
