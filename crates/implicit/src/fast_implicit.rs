@@ -65,17 +65,18 @@
 //! (above 1 mm/s and above 0.6 of the window's before: a jitter that falls faster settles at the
 //! weight it has, where the slack springs converge freely), with no spring more than 1 % over the
 //! limit and no point within [`CONTACT_DISTANCE`](crate::CONTACT_DISTANCE) of a collision object
-//! (friction holds such a cloth's springs where the solve leaves them, and a stiffer limit would
-//! only fight the friction), raises the weight tenfold, at most three times (one refactorisation
-//! each); the multipliers are rescaled so that the tensions they stand for are kept. Each level is
-//! measured for two windows before it is raised again or judged: a raise after which the second
-//! window's jitter exceeds the jitter of the window before it is undone, and the level held until
-//! the cloth moves again. A window faster than 6 cm/s, a step that starts with a point faster than
-//! 0.5 m/s, the limit switched off or [`Solver::reset`] return the weight to its least value (the
-//! cache, like the multipliers, is the solver's own: a swap starts afresh). While a raise is being
-//! judged only the windows count: the raise itself moves a few points fast for a step or two as the
-//! tensions it converges redistribute; a window faster than 6 cm/s then returns the weight to its
-//! least value and holds it there until a later window moves again.
+//! (its friction's drag lets a resting point follow only a small share of what pulls it, so a
+//! stiffer limit would fight the friction rather than converge a chain), raises the weight tenfold,
+//! at most three times (one refactorisation each); the multipliers are rescaled so that the
+//! tensions they stand for are kept. Each level is measured for two windows before it is raised
+//! again or judged: a raise after which the second window's jitter exceeds the jitter of the window
+//! before it is undone, and the level held until the cloth moves again. A window faster than 6
+//! cm/s, a step that starts with a point faster than 0.5 m/s, the limit switched off or
+//! [`Solver::reset`] return the weight to its least value (the cache, like the multipliers, is the
+//! solver's own: a swap starts afresh). While a raise is being judged only the windows count: the
+//! raise itself moves a few points fast for a step or two as the tensions it converges
+//! redistribute; a window faster than 6 cm/s then returns the weight to its least value and holds
+//! it there until a later window moves again.
 //!
 //! NOTE: the multiplier is a vector fixed in space, not a length along the spring's current
 //! direction. A binding spring's tension is `w_s |u_s|`; where it exceeds `w_s 1.1 L_s` the

@@ -510,7 +510,7 @@ fn fast_implicit_is_finite_and_settles_on_every_scene_at_stiff_springs_and_one_s
 }
 
 #[test]
-#[ignore = "long (release: about 15 minutes), and not met yet: selfCollision at 1e6 N/m with the \
+#[ignore = "long (release: about 10 minutes), and not met yet: the sphere at 1e6 N/m with the \
             limit off does not settle"]
 fn implicit_is_finite_and_settles_on_every_scene_at_stiff_springs_and_one_step_per_frame() {
     every_scene_stiff(&["implicit"]);
