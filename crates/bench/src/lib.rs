@@ -238,7 +238,7 @@ mod tests {
         assert_eq!(mesh.spec().width, 1.0);
         assert_eq!(mesh.springs().len(), 14_502);
         assert_eq!(mesh.pinned().iter().filter(|&&p| p).count(), 4);
-        // The big cloth: 256 x 256 has 390,658 springs.
+        // The big cloth of the speed figures: 256 x 256 has 390,658 springs.
         assert_eq!(pinned_grid(256).unwrap().springs().len(), 390_658);
         assert!(pinned_grid(1).is_err());
     }

@@ -319,7 +319,7 @@ fn without_the_limit_fast_implicit_holds_verlets_equilibrium() {
     // ~3e-9 m of the exact one, see verlet_rest), it must stay there: a start 1e-6 m off its
     // own fixed point along any mode faster than 1 rad/s would move by about that much in the
     // 2 s run (the drag and the iteration both pull it home), so a drift under 1e-6 m bounds
-    // the distance between the two rest states by the 1e-6 m.
+    // the distance between the two rest states by the 1e-6 m asked of them.
     let mesh = pinned4(50);
     for ks in [1e5, 5000.0] {
         let params = static_params(ks, false);
@@ -354,7 +354,7 @@ fn with_the_limit_the_pinned4_centre_settles_within_5_mm_of_verlets() {
     // The centre hangs from a chain of about 35 binding springs from each corner (the
     // 49-spring diagonal less the slack middle), so 0.5 % of a 2 cm spring on each moves it by
     // 35 x 1e-4 = 3.5 mm: the two implicit solvers agree with each other to a fraction of a
-    // millimetre and with Verlet to within the 5 mm; a limit that gave way (or a
+    // millimetre and with Verlet to within the 5 mm asked; a limit that gave way (or a
     // solver that had not settled) moves the centre by centimetres.
     let mesh = pinned4(50);
     let params = StepParams {

@@ -378,7 +378,7 @@ fn q_is_answered_within_half_a_second_on_a_1024_by_1024_cloth() {
     t.wait_modes("the shell's modes", SHELL_MODES);
     let took = asked.elapsed();
     // NOTE: the modes are polled every 50 ms and tmux answers within a few; half a second
-    // is the bound for a key, with the poll's slack inside it.
+    // is the bound on answering a key, with the poll's slack inside it.
     assert!(
         took < Duration::from_millis(500),
         "q took {took:?} on a 1024 x 1024 cloth"

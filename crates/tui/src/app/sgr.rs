@@ -164,7 +164,7 @@ mod tests {
     fn indexed_and_rgb_colours_become_basic_codes() {
         // crossterm's Cyan is index 14; its background Black is index 0.
         assert_eq!(through(&[b"\x1b[38;5;14;48;5;0mx"]), "\x1b[96;40mx");
-        // The 256-colour brown (index 137 = rgb 175, 135, 95) is one of the 16 too.
+        // A 256-colour brown (index 137 = rgb 175, 135, 95) is one of the 16 too.
         let s = through(&[b"\x1b[38;5;137m"]);
         assert!(!s.contains("38;5"), "{s:?}");
         assert_eq!(through(&[b"\x1b[38;2;255;0;0m"]), "\x1b[91m");
