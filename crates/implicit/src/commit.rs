@@ -7,15 +7,24 @@ use cloth_solver::{Collider, SolveError, SpatialHash, StepParams};
 
 use crate::contact::Contacts;
 
-/// Writes the damped inertial prediction `y = x0 + h v0 / (1 + c h)`, with the velocity
-/// `v0 = (x0 - last) / h` of `state`, into `y`: `x0 + (x0 - last) / (1 + c h)`. Pinned points
-/// stay where they are.
-pub(crate) fn inertial_prediction(
+/// What a step starts from: the points of `state` resting on `colliders` (into `contacts`),
+/// each free point's damped inertial prediction `y = x0 + h v0 / (1 + (c + c_f) h)` with the
+/// velocity `v0 = (x0 - last) / h` (into `y`: `x0 + (x0 - last) / (1 + (c + c_f) h)`, `c_f` the
+/// drag rate of the friction it rests on, 0 for most), and its mass term `m (1 + (c + c_f) h) /
+/// h^2` for a point mass `mass` (into `inertia`). Pinned points stay where they are.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn predict(
     mesh: &ClothMesh,
+    colliders: &[Collider],
+    params: &StepParams,
     state: &ClothState,
-    ch: f64,
+    mass: f64,
     y: &mut Vec<Vec3>,
+    inertia: &mut Vec<f64>,
+    contacts: &mut Contacts,
 ) {
+    let h = params.dt();
+    let ch = params.drag_rate() * h;
     y.clear();
     y.extend(
         state
@@ -25,22 +34,10 @@ pub(crate) fn inertial_prediction(
             .zip(mesh.pinned())
             .map(|((&p, &l), &pin)| if pin { p } else { p + (p - l) / (1.0 + ch) }),
     );
-}
-
-/// Finds the points of `state` resting on `colliders` (with the prediction `y` of drag `c h`
-/// from [`inertial_prediction`]) and adds their friction's drag to their prediction: `y = x0 +
-/// (x0 - last) / (1 + (c + c_f) h)` (see [`Contacts`]).
-pub(crate) fn contact_prediction(
-    mesh: &ClothMesh,
-    colliders: &[Collider],
-    params: &StepParams,
-    state: &ClothState,
-    ch: f64,
-    y: &mut [Vec3],
-    contacts: &mut Contacts,
-) {
     contacts.find(mesh, colliders, params, state, y);
-    let h = params.dt();
+    let free = mass * (1.0 + ch) / (h * h);
+    inertia.clear();
+    inertia.extend(contacts.rates().iter().map(|&rate| free + mass * rate / h));
     for (((y, &rate), &p), &l) in y
         .iter_mut()
         .zip(contacts.rates())

@@ -132,7 +132,7 @@ use cloth_solver::{
 };
 
 use crate::cholesky::Cholesky;
-use crate::commit::{commit, contact_prediction, hold_still, inertial_prediction};
+use crate::commit::{commit, hold_still, predict};
 use crate::contact::{Contacts, touches};
 use crate::memory::{Allocation, try_filled};
 use crate::topology::{NONE, Topology};
@@ -629,22 +629,15 @@ impl Solver for FastImplicit {
         {
             self.release();
         }
-        inertial_prediction(mesh, state, c * h, &mut self.y);
-        contact_prediction(
+        predict(
             mesh,
             colliders,
             params,
             state,
-            c * h,
+            mass,
             &mut self.y,
+            &mut self.point_inertia,
             &mut self.contacts,
-        );
-        self.point_inertia.clear();
-        self.point_inertia.extend(
-            self.contacts
-                .rates()
-                .iter()
-                .map(|&rate| inertia + mass * rate / h),
         );
         self.prepare(mesh, params, inertia)?;
         let max_iterations = self.iterations;

@@ -139,7 +139,7 @@ use cloth_mesh::{ClothMesh, ClothState, MAX_STRETCH, Vec3};
 use cloth_solver::{Collider, SolveError, Solver, SpatialHash, StepParams, StepReport};
 
 use crate::cholesky::{AnyCholesky, Cholesky};
-use crate::commit::{commit, contact_prediction, hold_still, inertial_prediction};
+use crate::commit::{commit, hold_still, predict};
 use crate::contact::Contacts;
 use crate::memory::{Allocation, check_available, try_filled};
 use crate::spring_energy::{SpringLaw, limit_penalty, limiter_stiffness};
@@ -805,23 +805,16 @@ impl Solver for ImplicitEuler {
             self.lambda_before.clear();
         }
         extrapolate_multipliers(&mut self.lambda, &mut self.lambda_before);
-        inertial_prediction(mesh, state, c * h, &mut self.y);
-        contact_prediction(
+        let mut point_inertia = std::mem::take(&mut self.point_inertia);
+        predict(
             mesh,
             colliders,
             params,
             state,
-            c * h,
+            mass,
             &mut self.y,
+            &mut point_inertia,
             &mut self.contacts,
-        );
-        let mut point_inertia = std::mem::take(&mut self.point_inertia);
-        point_inertia.clear();
-        point_inertia.extend(
-            self.contacts
-                .rates()
-                .iter()
-                .map(|&rate| inertia + mass * rate / h),
         );
         let keep = |rho: f64| if rho > 0.0 { 1.0 - rho / k_lim } else { 0.0 };
         let mut problem = Problem {
