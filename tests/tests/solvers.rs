@@ -11,7 +11,7 @@ use cloth_solver::{Registry, advance_frame};
 const FRAMES: usize = 6;
 
 fn registry() -> Registry {
-    cloth_tui::default_registry().with(clothsim_xpbd::Xpbd::ENTRY)
+    clothsim::default_registry().with(clothsim_xpbd::Xpbd::ENTRY)
 }
 
 #[test]

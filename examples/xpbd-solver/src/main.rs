@@ -3,5 +3,5 @@
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    cloth_tui::run(&cloth_tui::default_registry().with(clothsim_xpbd::Xpbd::ENTRY))
+    clothsim::run(&clothsim::default_registry().with(clothsim_xpbd::Xpbd::ENTRY))
 }

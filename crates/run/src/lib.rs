@@ -1,0 +1,29 @@
+//! clothsim's one run: a scene stepped frame by frame under any solver of a registry, with
+//! the divergence guard, the per-frame numbers and the simulated clock, used by every front
+//! end (the live UI, `simulate`, `render`, `compare`, `bench`, `check`).
+//!
+//! [`Run`] is one cloth (scene, state, solver, guard, stats, clock): it steps a frame, applies
+//! an edit of the live settings and swaps a solver, rescaling the previous positions whenever
+//! the step changes (the one place that does, through [`cloth_mesh::ClothState::retime`]).
+//! [`study`] runs several in lockstep. Beside it live what a run leaves behind: [`export`]
+//! (meshes, animations, tables, recordings), [`state_file`] (a state to carry on from),
+//! [`output`] (standard output and atomic files) and [`memory`] (what a cloth needs).
+//!
+//! Nothing here touches a terminal or parses a command line.
+
+pub mod export;
+pub mod guard;
+pub mod headless;
+pub mod memory;
+pub mod output;
+pub mod progress;
+mod run;
+pub mod solvers;
+pub mod state_file;
+pub mod study;
+
+pub use cloth_solver::{Registry, SolverEntry};
+pub use run::{
+    COMING_APART_STRETCH, Cause, Command, Fault, HISTORY, Run, Sample, Settings, numeric_options,
+};
+pub use solvers::default_registry;

@@ -1,0 +1,793 @@
+//! The running cloth: scene, live settings, state, solver, simulated clock and diagnostics.
+//!
+//! Time here is simulated time only. Whoever steps it (the live UI's stepping thread, compare
+//! mode's coordinator, a headless command or a test) decides how many steps to take; nothing in
+//! this module reads a clock, so the same calls give the same bits. Each frame ends with the
+//! divergence guard ([`crate::guard`]).
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+
+use cloth_mesh::ClothState;
+use cloth_scene::Scene;
+use cloth_solver::{OptionKind, Registry, SolveError, Solver, SolverEntry, StepParams};
+use serde_json::Value;
+
+use crate::export::StatsRow;
+use crate::guard::{Divergence, Guard};
+use crate::solvers::{self, Choice};
+use cloth_solver::Collider;
+
+/// Plot samples kept (one per simulated frame: 20 s at 90 frames/s).
+pub const HISTORY: usize = 1800;
+
+/// The largest spring stretch (length over rest length) past which a cloth swept in the
+/// faithful order is taken as coming apart when it stays there for a second: the course's
+/// limit holds springs at 1.1, and a falling cloth overshoots it by a few percent only.
+pub const COMING_APART_STRETCH: f64 = 1.5;
+
+/// One plot sample, taken at the end of each simulated frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Simulated time, s.
+    pub time: f64,
+    /// Kinetic energy, J.
+    pub kinetic: f64,
+    /// Largest spring length / rest length.
+    pub stretch: f64,
+}
+
+/// Why the simulation stopped by itself.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fault {
+    /// Simulated time of the failure, s.
+    pub time: f64,
+    /// What happened, in one sentence.
+    pub what: String,
+    /// What to change, fitted to the cause and the settings at the time.
+    pub advice: String,
+    /// Whether going on from the last good frame makes sense (a runaway; not a NaN).
+    pub resumable: bool,
+    /// The frame it happened in, counted like [`Run::frames`].
+    pub frame: u64,
+    /// What stopped the run: a step's error or the divergence guard.
+    pub cause: Cause,
+}
+
+/// What stopped a run.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Cause {
+    /// A step of the solver failed (a non-finite state, a method that failed).
+    Step(SolveError),
+    /// The divergence guard stopped a frame that ended.
+    Diverged(Divergence),
+    /// This copy of a run holds no solver (see [`Run::release_solver`]).
+    NoSolver,
+}
+
+/// A change asked of a running simulation: what the UI sends to the thread that steps it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Command {
+    /// Run (simulated time at `rate` times the wall clock's) or pause.
+    Run {
+        /// Whether simulated time advances.
+        running: bool,
+        /// Simulated seconds per wall second.
+        rate: f64,
+    },
+    /// New live parameters and objects.
+    Settings(Settings),
+    /// Another solver of the registry, by name, with the options the scene gives it (the
+    /// motion carries over).
+    Solver(String),
+    /// Back to the start positions at rest.
+    Reset,
+    /// Pause, then exactly one frame.
+    StepFrame,
+    /// Go on after a stop, with the runaway test off until the next reset.
+    ResumeAnyway,
+}
+
+/// Everything the live settings hold: the step parameters, the collision objects (whose
+/// friction is editable) and the active solver's numeric options.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// Live step parameters.
+    pub params: StepParams,
+    /// Live collision objects.
+    pub colliders: Vec<Collider>,
+    /// The active solver's options as numbers (a choice as its index), in its entry's order
+    /// (see [`numeric_options`]).
+    pub options: Vec<f64>,
+}
+
+/// The running cloth.
+pub struct Run {
+    /// The scene as loaded (its values are what "restore" goes back to), shared with the
+    /// copies of this simulation that a stepping thread runs: one mesh for both.
+    pub scene: Arc<Scene>,
+    /// Live parameters and objects.
+    pub settings: Settings,
+    /// The cloth's positions: the one source of truth.
+    pub state: ClothState,
+    /// The state at the end of the last good frame, shown after a failure.
+    last_good: ClothState,
+    /// The solver; `None` in the UI's copy of a simulation that a thread steps, so its scratch
+    /// (a factorisation, for the implicit solvers) is held once, by the thread's copy.
+    solver: Option<Box<dyn Solver>>,
+    /// The solvers the user can switch between.
+    registry: Registry,
+    /// The active solver's entry and the options it was built with.
+    choice: Choice,
+    /// Simulated seconds since the start or the last reset.
+    pub time: f64,
+    /// Steps since the start or the last reset.
+    pub steps: u64,
+    /// Frames completed since the start or the last reset.
+    pub frames: u64,
+    step_in_frame: u32,
+    /// Plot samples, oldest first.
+    pub history: VecDeque<Sample>,
+    /// Every frame's row of numbers since the start or the last reset (the table the plots'
+    /// key writes).
+    pub record: Vec<StatsRow>,
+    /// Counts resets (and starts from a state): a new count means a new [`Self::record`].
+    pub generation: u64,
+    /// Largest kinetic energy since the start or the last reset, J (the energy plot's scale,
+    /// so a settled cloth reads as zero rather than as rescaled round-off).
+    pub peak_kinetic: f64,
+    /// Set when the run diverged or exploded; cleared by a reset.
+    pub fault: Option<Fault>,
+    guard: Guard,
+    recording: bool,
+}
+
+impl Run {
+    /// Starts `scene` with the solver `name` of `registry` (or the scene's own), at rest.
+    ///
+    /// # Errors
+    /// When the solver is not registered or refuses the scene's options for it.
+    pub fn new(
+        scene: impl Into<Arc<Scene>>,
+        registry: Registry,
+        name: Option<&str>,
+    ) -> anyhow::Result<Self> {
+        let scene = scene.into();
+        let choice = solvers::choose(&registry, &scene, name)?;
+        let built = choice.build(&scene.mesh)?;
+        let state = ClothState::new(&scene.mesh);
+        let settings = Settings {
+            params: StepParams {
+                steps_per_frame: solvers::steps_for(&scene, &choice.entry),
+                ..scene.params
+            },
+            colliders: scene.colliders.clone(),
+            options: numeric_options(&choice.entry, &choice.options),
+        };
+        let mut sim = Self {
+            last_good: state.clone(),
+            state,
+            settings,
+            scene,
+            solver: Some(built),
+            registry,
+            choice,
+            time: 0.0,
+            steps: 0,
+            frames: 0,
+            step_in_frame: 0,
+            history: VecDeque::with_capacity(HISTORY),
+            record: Vec::new(),
+            generation: 0,
+            peak_kinetic: 0.0,
+            fault: None,
+            guard: Guard::new(),
+            recording: true,
+        };
+        sim.sample();
+        Ok(sim)
+    }
+
+    /// The scene's own settings, for "restore": its parameters (with the steps per frame it
+    /// gives the active solver, see [`solvers::steps_for`]), objects and the options it gives
+    /// the active solver.
+    pub fn scene_settings(&self) -> Settings {
+        let entry = &self.choice.entry;
+        let default = self.registry.default_entry().map_or("", SolverEntry::name);
+        let options = self
+            .scene
+            .options_for(entry.name(), default, |k| entry.option(k).is_some());
+        Settings {
+            params: StepParams {
+                steps_per_frame: solvers::steps_for(&self.scene, entry),
+                ..self.scene.params
+            },
+            colliders: self.scene.colliders.clone(),
+            options: numeric_options(entry, &options),
+        }
+    }
+
+    /// The solvers the user can switch between.
+    pub fn registry(&self) -> &Registry {
+        &self.registry
+    }
+
+    /// The active solver's entry.
+    pub fn entry(&self) -> &SolverEntry {
+        &self.choice.entry
+    }
+
+    /// The active solver's options, a JSON object.
+    pub fn options(&self) -> &Value {
+        &self.choice.options
+    }
+
+    /// The name of the solver the scene asks for (the registry's first when it names none).
+    pub fn scene_solver(&self) -> &str {
+        match &self.scene.solver {
+            Some(name) => match self.registry.get(name) {
+                Ok(entry) => entry.name(),
+                Err(_) => name,
+            },
+            None => self.registry.default_entry().map_or("", SolverEntry::name),
+        }
+    }
+
+    /// The step, s.
+    pub fn dt(&self) -> f64 {
+        self.settings.params.dt()
+    }
+
+    /// Mass of one point at the live density, kg.
+    pub fn point_mass(&self) -> f64 {
+        self.scene.mesh.point_mass(self.settings.params.density)
+    }
+
+    /// Replaces the solver by the registered one called `name`, with the options the scene
+    /// gives it; the state (and so the motion) carries over. Steps per frame that were the old
+    /// solver's (not edited, see [`Self::steps_follow_solver`]) become the new solver's.
+    ///
+    /// # Errors
+    /// When `name` is not registered or the solver cannot be built; the current solver stays.
+    pub fn set_solver(&mut self, name: &str) -> anyhow::Result<()> {
+        let choice = solvers::choose(&self.registry, &self.scene, Some(name))?;
+        let built = choice.build(&self.scene.mesh)?;
+        if self.solver.is_some() {
+            self.solver = Some(built);
+        }
+        let follow = self.steps_follow_solver();
+        self.settings.options = numeric_options(&choice.entry, &choice.options);
+        self.choice = choice;
+        if follow {
+            let old_dt = self.dt();
+            self.settings.params.steps_per_frame = solvers::steps_for(&self.scene, self.entry());
+            self.keep_velocity(old_dt);
+        }
+        Ok(())
+    }
+
+    /// Rescales the previous positions after the step changed from `old_dt` to the live one,
+    /// so the cloth keeps its velocity (see [`ClothState::retime`]): the one place a run does,
+    /// whatever changed the step (a solver with other steps per frame, an edit of steps per
+    /// frame or frames per second).
+    fn keep_velocity(&mut self, old_dt: f64) {
+        let new_dt = self.dt();
+        self.state.retime(old_dt, new_dt);
+        self.last_good.retime(old_dt, new_dt);
+    }
+
+    /// Drops the solver: this is the UI's copy of a simulation that a thread steps (with its
+    /// own solver), and it is never stepped. A change of solver or options is still checked by
+    /// building the solver, which is then dropped.
+    pub fn release_solver(&mut self) {
+        self.solver = None;
+    }
+
+    /// Whether this copy holds a solver (see [`Self::release_solver`]).
+    pub fn has_solver(&self) -> bool {
+        self.solver.is_some()
+    }
+
+    /// Whether the steps per frame are the ones the scene gives the active solver (its
+    /// recommendation when the scene gives none): not edited, so they follow a change of
+    /// solver.
+    pub fn steps_follow_solver(&self) -> bool {
+        self.settings.params.steps_per_frame == solvers::steps_for(&self.scene, self.entry())
+    }
+
+    /// A hint to try the `colored` order when the active solver sweeps in the `faithful` order
+    /// and the cloth has come apart under it: its largest stretch above
+    /// [`COMING_APART_STRETCH`] in every frame of the last simulated second.
+    pub fn order_hint(&self) -> Option<String> {
+        let entry = self.entry();
+        let option = entry.option("order")?;
+        let cloth_solver::OptionKind::Choice { choices, .. } = option.kind else {
+            return None;
+        };
+        if entry.choice(self.options(), "order").ok()? != "faithful"
+            || !choices.contains(&"colored")
+        {
+            return None;
+        }
+        let fps = self.settings.params.frames_per_sec;
+        let second = fps.ceil().max(1.0) as usize;
+        let apart = self.history.len() > second
+            && self
+                .history
+                .iter()
+                .rev()
+                .take(second)
+                .all(|s| s.stretch > COMING_APART_STRETCH);
+        apart.then(|| {
+            format!(
+                "springs have stayed over {COMING_APART_STRETCH} x their rest length for a second: \
+                 the faithful sweep cannot hold this cloth; try order colored (its row below the \
+                 solver, or --order colored)"
+            )
+        })
+    }
+
+    /// Rebuilds the active solver with the options of [`Self::settings`]; the state carries
+    /// over. A solver owns only caches, so this is a swap.
+    ///
+    /// # Errors
+    /// When the solver refuses the options; the current solver and options stay.
+    pub fn apply_options(&mut self) -> anyhow::Result<()> {
+        let entry = self.choice.entry;
+        let mut options = self.choice.options.as_object().cloned().unwrap_or_default();
+        for (o, &v) in entry.options().iter().zip(&self.settings.options) {
+            let value = match o.kind {
+                OptionKind::Integer { .. } => Value::from(v.round() as i64),
+                OptionKind::Number { .. } => Value::from(v),
+                OptionKind::Choice { choices, default } => Value::from(
+                    choices
+                        .get(v.round().max(0.0) as usize)
+                        .copied()
+                        .unwrap_or(default),
+                ),
+            };
+            options.insert(o.name.to_owned(), value);
+        }
+        let choice = Choice {
+            entry,
+            options: Value::Object(options),
+        };
+        match choice.build(&self.scene.mesh) {
+            Ok(solver) => {
+                if self.solver.is_some() {
+                    self.solver = Some(solver);
+                }
+                self.choice = choice;
+                Ok(())
+            }
+            Err(e) => {
+                self.settings.options = numeric_options(&entry, &self.choice.options);
+                Err(e)
+            }
+        }
+    }
+
+    /// Carries on from `state`, reached after `frames` frames (`time` seconds) of the scene:
+    /// what `--from` gives. The plots start again from it.
+    pub fn start_from(&mut self, state: ClothState, frames: u64, time: f64) {
+        self.state = state;
+        self.last_good.clone_from(&self.state);
+        if let Some(s) = &mut self.solver {
+            s.reset();
+        }
+        self.time = time;
+        self.frames = frames;
+        self.steps = frames.saturating_mul(u64::from(self.settings.params.steps_per_frame));
+        self.step_in_frame = 0;
+        self.history.clear();
+        self.record.clear();
+        self.generation += 1;
+        self.peak_kinetic = 0.0;
+        self.fault = None;
+        self.guard.rearm();
+        self.sample();
+    }
+
+    /// Back to the start positions at rest, keeping the live settings (the course's R key).
+    pub fn reset(&mut self) {
+        self.state.reset(&self.scene.mesh);
+        self.last_good.clone_from(&self.state);
+        if let Some(s) = &mut self.solver {
+            s.reset();
+        }
+        self.time = 0.0;
+        self.steps = 0;
+        self.frames = 0;
+        self.step_in_frame = 0;
+        self.history.clear();
+        self.record.clear();
+        self.generation += 1;
+        self.peak_kinetic = 0.0;
+        self.fault = None;
+        self.guard.rearm();
+        self.sample();
+    }
+
+    /// Goes on from the last good frame after a stop, without the runaway test until the next
+    /// reset (the user judged the run honest). A non-finite state cannot go on.
+    ///
+    /// # Errors
+    /// When the stop was for non-finite values.
+    pub fn resume_anyway(&mut self) -> Result<(), String> {
+        match &self.fault {
+            Some(f) if !f.resumable => {
+                Err(format!("{}; it cannot go on: press r to reset", f.what))
+            }
+            _ => {
+                self.fault = None;
+                self.last_good.clone_from(&self.state);
+                self.guard.allow_runaway();
+                Ok(())
+            }
+        }
+    }
+
+    /// Applies a command. `Run` is the stepping loop's business and changes nothing here.
+    ///
+    /// # Errors
+    /// A solver that cannot be built, or the fault of a frame stepped.
+    pub fn apply(&mut self, command: Command) -> Result<(), String> {
+        match command {
+            Command::Run { .. } => Ok(()),
+            Command::Settings(s) => {
+                let options_changed = s.options != self.settings.options;
+                let old_dt = self.dt();
+                self.settings = s;
+                self.keep_velocity(old_dt);
+                if options_changed {
+                    self.apply_options().map_err(|e| format!("{e:#}"))
+                } else {
+                    Ok(())
+                }
+            }
+            Command::Solver(name) => self.set_solver(&name).map_err(|e| format!("{e:#}")),
+            Command::Reset => {
+                self.reset();
+                Ok(())
+            }
+            Command::StepFrame => self.step_frame().map_err(|f| f.what),
+            Command::ResumeAnyway => self.resume_anyway(),
+        }
+    }
+
+    /// One step of `dt`. On failure the state goes back to the last good frame and
+    /// [`Self::fault`] says why.
+    ///
+    /// # Errors
+    /// The fault, also stored in [`Self::fault`].
+    pub fn step(&mut self) -> Result<(), Box<Fault>> {
+        if let Some(f) = &self.fault {
+            return Err(Box::new(f.clone()));
+        }
+        let dt = self.dt();
+        let Some(solver) = &mut self.solver else {
+            let fault = Fault {
+                time: self.time,
+                what: "the UI's copy of the cloth has no solver: a thread steps it".to_owned(),
+                advice: "this is a fault of clothsim; please report it".to_owned(),
+                resumable: false,
+                frame: self.frames + 1,
+                cause: Cause::NoSolver,
+            };
+            return Err(Box::new(self.stop(fault)));
+        };
+        let result = solver.step(
+            &self.scene.mesh,
+            &self.settings.colliders,
+            &self.settings.params,
+            &mut self.state,
+        );
+        if let Err(e) = result {
+            let fault = Fault {
+                time: self.time,
+                what: e.to_string(),
+                advice: Divergence::NonFinite.advice(
+                    &self.choice.entry,
+                    &self.settings.params,
+                    self.point_mass(),
+                ),
+                resumable: false,
+                frame: self.frames + 1,
+                cause: Cause::Step(e),
+            };
+            return Err(Box::new(self.stop(fault)));
+        }
+        self.time += dt;
+        self.steps += 1;
+        self.step_in_frame += 1;
+        if self.step_in_frame >= self.settings.params.steps_per_frame {
+            self.step_in_frame = 0;
+            self.frames += 1;
+            self.end_frame()?;
+        }
+        Ok(())
+    }
+
+    /// Exactly one frame: `steps_per_frame` steps.
+    ///
+    /// # Errors
+    /// The first step's fault.
+    pub fn step_frame(&mut self) -> Result<(), Box<Fault>> {
+        self.step_frame_with(&mut || {})
+    }
+
+    /// Exactly one frame, calling `each_step` after every step that succeeded (a progress bar
+    /// counts steps, since one frame of a big cloth can take seconds).
+    ///
+    /// # Errors
+    /// The first step's fault.
+    pub fn step_frame_with(&mut self, each_step: &mut dyn FnMut()) -> Result<(), Box<Fault>> {
+        for _ in 0..self.settings.params.steps_per_frame {
+            self.step()?;
+            each_step();
+        }
+        Ok(())
+    }
+
+    /// The state the run stopped at, when a fault stopped it: the frame the guard refused, or
+    /// the state a failed step left (which may hold non-finite values). [`Self::state`] is
+    /// then the last good frame.
+    pub fn failed_state(&self) -> Option<&ClothState> {
+        self.fault.as_ref().map(|_| &self.last_good)
+    }
+
+    /// Whether each frame's row of numbers is kept in [`Self::record`] (on by default, for
+    /// the live UI's plots key). A headless run of many frames turns it off and keeps its own
+    /// table, so memory does not grow with the run.
+    pub fn set_recording(&mut self, on: bool) {
+        self.recording = on;
+        if !on {
+            self.record = Vec::new();
+        }
+    }
+
+    fn end_frame(&mut self) -> Result<(), Box<Fault>> {
+        let checked = self.guard.check_state(
+            &self.state,
+            &self.settings.params,
+            self.point_mass(),
+            self.time,
+        );
+        if let Err(d) = checked {
+            return Err(Box::new(self.fail(&d)));
+        }
+        let sample = self.measure();
+        self.push(sample);
+        self.last_good.clone_from(&self.state);
+        Ok(())
+    }
+
+    /// The row of the frame just ended (of the start, before any step); the wall time is the
+    /// caller's to measure, so it is left out.
+    fn measure(&self) -> StatsRow {
+        let steps = if self.steps == 0 {
+            0
+        } else {
+            u64::from(self.settings.params.steps_per_frame)
+        };
+        StatsRow::measure(
+            &self.scene.mesh,
+            &self.state,
+            self.point_mass(),
+            self.dt(),
+            self.frames,
+            self.time,
+            steps,
+            None,
+        )
+    }
+
+    fn push(&mut self, row: StatsRow) {
+        if self.history.len() == HISTORY {
+            self.history.pop_front();
+        }
+        let s = Sample {
+            time: row.time_s,
+            kinetic: row.kinetic_energy_j,
+            stretch: row.max_stretch,
+        };
+        self.history.push_back(s);
+        if self.recording {
+            self.record.push(row);
+        }
+        self.peak_kinetic = self.peak_kinetic.max(s.kinetic);
+    }
+
+    fn sample(&mut self) {
+        let s = self.measure();
+        self.push(s);
+    }
+
+    fn fail(&mut self, d: &Divergence) -> Fault {
+        let fault = Fault {
+            time: self.time,
+            what: d.describe(),
+            advice: d.advice(&self.choice.entry, &self.settings.params, self.point_mass()),
+            resumable: matches!(d, Divergence::Runaway { .. }),
+            frame: self.frames,
+            cause: Cause::Diverged(d.clone()),
+        };
+        self.stop(fault)
+    }
+
+    fn stop(&mut self, fault: Fault) -> Fault {
+        // NOTE: the failed state may hold NaN or huge values; drawing and plotting it would
+        // show garbage, so the last good frame is put back (the user sees where it was), and
+        // the failed one is kept where the last good one was, for `failed_state`.
+        std::mem::swap(&mut self.state, &mut self.last_good);
+        self.guard.clear();
+        self.fault = Some(fault.clone());
+        fault
+    }
+
+    /// A warning when the live settings are past an explicit solver's stability limit.
+    pub fn stability_warning(&self) -> Option<String> {
+        if !self.choice.entry.is_explicit() {
+            return None;
+        }
+        let p = &self.settings.params;
+        let limit = p.explicit_ks_limit(self.point_mass());
+        (p.ks > limit).then(|| {
+            format!(
+                "ks {:.0} N/m is past {}'s stability limit of about {limit:.0} N/m at this density \
+                 and step: expect it to blow up; lower ks, raise steps/frame or density",
+                p.ks,
+                crate::guard::capitalised(self.choice.entry.name())
+            )
+        })
+    }
+}
+
+/// The values of `entry`'s options in `options` (their defaults where absent), in the entry's
+/// order, as numbers (a choice as its index among the choices): what the parameter panel
+/// shows as the solver's rows.
+pub fn numeric_options(entry: &SolverEntry, options: &Value) -> Vec<f64> {
+    entry
+        .options()
+        .iter()
+        .map(|o| match o.kind {
+            OptionKind::Choice { choices, default } => {
+                let name = options
+                    .get(o.name)
+                    .and_then(Value::as_str)
+                    .unwrap_or(default);
+                choices.iter().position(|&c| c == name).unwrap_or(0) as f64
+            }
+            OptionKind::Integer { default, .. } => options
+                .get(o.name)
+                .and_then(Value::as_f64)
+                .unwrap_or(default as f64),
+            OptionKind::Number { default, .. } => options
+                .get(o.name)
+                .and_then(Value::as_f64)
+                .unwrap_or(default),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pinned4(registry: Registry) -> Run {
+        let scene = cloth_scene::load("pinned4", &[]).unwrap();
+        Run::new(scene, registry, None).unwrap()
+    }
+
+    #[test]
+    fn new_settings_with_other_option_values_rebuild_the_solver_with_them() {
+        let mut sim = pinned4(crate::solvers::default_registry());
+        let entry = *sim.entry();
+        let (k, option) = entry
+            .options()
+            .iter()
+            .filter(|o| o.numeric().is_some())
+            .enumerate()
+            .next()
+            .expect("the default solver has a numeric option row");
+        let (min, max, default) = option.numeric().unwrap();
+        // Any other allowed value: the worker must build with what the UI sent, not keep its own.
+        let other = if default < max {
+            (default + 1.0).min(max)
+        } else {
+            min
+        };
+        let mut settings = sim.settings.clone();
+        settings.options[k] = other;
+        sim.apply(Command::Settings(settings)).unwrap();
+        assert_eq!(sim.settings.options[k], other);
+        assert_eq!(
+            sim.options().get(option.name).and_then(Value::as_f64),
+            Some(other),
+            "{}",
+            sim.options()
+        );
+        assert!(sim.step_frame().is_ok());
+    }
+
+    #[test]
+    fn a_solver_command_switches_by_name_and_an_unknown_name_keeps_the_solver() {
+        let registry = crate::solvers::default_registry();
+        let names: Vec<&str> = registry.names().collect();
+        let mut sim = pinned4(registry.clone());
+        let last = names[names.len() - 1];
+        sim.apply(Command::Solver(last.to_owned())).unwrap();
+        assert_eq!(sim.entry().name(), last);
+        // The options rows are the new solver's, as the scene gives them.
+        assert_eq!(
+            sim.settings.options,
+            numeric_options(sim.entry(), sim.options())
+        );
+        let err = sim
+            .apply(Command::Solver("no-such-solver".to_owned()))
+            .unwrap_err();
+        assert!(err.contains("no-such-solver"), "{err}");
+        assert_eq!(sim.entry().name(), last);
+        assert!(sim.step_frame().is_ok());
+    }
+
+    fn kinetic(run: &Run) -> f64 {
+        cloth_solver::kinetic_energy(&run.state, run.point_mass(), run.dt())
+    }
+
+    /// A run of `scene` under `first` for `frames - 1` frames, then one frame under `second`
+    /// (through `change`), against `frames` frames under `first` alone: the kinetic energy at
+    /// the frame after the change, and the reference's.
+    fn across(scene: &str, frames: u64, first: &str, change: impl Fn(&mut Run)) -> (f64, f64) {
+        let registry = crate::solvers::default_registry();
+        let scene = cloth_scene::load(scene, &[]).unwrap();
+        let mut reference = Run::new(scene.clone(), registry.clone(), Some(first)).unwrap();
+        let mut changed = Run::new(scene, registry, Some(first)).unwrap();
+        for _ in 0..frames - 1 {
+            reference.step_frame().unwrap();
+            changed.step_frame().unwrap();
+        }
+        reference.step_frame().unwrap();
+        change(&mut changed);
+        changed.step_frame().unwrap();
+        (kinetic(&changed), kinetic(&reference))
+    }
+
+    // A frame is 1/90 s: over one frame gravity and the springs change the kinetic energy of a
+    // falling cloth by a few percent at most, so any solver that keeps the velocity lands
+    // within 5 % of the reference; one that loses the velocity (previous positions one old
+    // step ago read as one new step ago) is off by the ratio of the steps, 30 x in energy
+    // terms squared.
+    #[test]
+    fn an_edit_of_steps_per_frame_keeps_the_kinetic_energy() {
+        let (after, reference) = across("sphere", 20, "verlet", |run| {
+            let mut settings = run.settings.clone();
+            settings.params.steps_per_frame = 31;
+            run.apply(Command::Settings(settings)).unwrap();
+        });
+        assert!(
+            (after / reference - 1.0).abs() < 0.05,
+            "{after} J after the edit, {reference} J without"
+        );
+    }
+
+    #[cfg(feature = "implicit")]
+    #[test]
+    fn a_swap_of_solver_keeps_the_kinetic_energy_on_the_falling_sphere_cloth() {
+        let (after, reference) = across("sphere", 20, "verlet", |run| {
+            run.set_solver("fast-implicit").unwrap();
+        });
+        assert!(reference > 50.0, "the cloth is falling: {reference} J");
+        assert!(
+            (after / reference - 1.0).abs() < 0.05,
+            "{after} J after the swap to fast-implicit, {reference} J under verlet"
+        );
+        let (after, reference) = across("sphere", 20, "fast-implicit", |run| {
+            run.set_solver("verlet").unwrap();
+        });
+        assert!(
+            (after / reference - 1.0).abs() < 0.05,
+            "{after} J after the swap to verlet, {reference} J under fast-implicit"
+        );
+    }
+}
