@@ -31,7 +31,7 @@ fn every_scene_runs_with_every_solver_and_stays_finite_with_its_pins_in_place() 
         let scene = cloth_scene::load(bundled.name, &[]).unwrap();
         for entry in registry.entries() {
             let what = format!("{} with {}", scene.origin, entry.name());
-            let options = scene.options_for(entry.name(), default, |k| entry.option(k).is_some());
+            let options = scene.options_for(entry.name(), default);
             let mut solver = entry
                 .build(&scene.mesh, &options)
                 .unwrap_or_else(|e| panic!("{what}: {e}"));

@@ -293,42 +293,8 @@ fn long_version(registry: &Registry) -> String {
         "{}\nsolvers: {}{missing}\nvector paths: {}",
         env!("CARGO_PKG_VERSION"),
         names.join(", "),
-        vector_paths()
+        cloth_solver::vector_paths()
     )
-}
-
-/// The SIMD instruction sets the solver's kernels use on this build and this CPU: those the
-/// compiler was allowed to use everywhere, and on x86-64 the wider ones the kernels choose at
-/// run time when the CPU has them.
-fn vector_paths() -> String {
-    let mut compiled = Vec::new();
-    for (on, name) in [
-        (cfg!(target_feature = "sse2"), "sse2"),
-        (cfg!(target_feature = "avx2"), "avx2"),
-        (cfg!(target_feature = "fma"), "fma"),
-        (cfg!(target_feature = "avx512f"), "avx512f"),
-        (cfg!(target_feature = "neon"), "neon"),
-    ] {
-        if on {
-            compiled.push(name);
-        }
-    }
-    let compiled = if compiled.is_empty() {
-        "none".to_owned()
-    } else {
-        compiled.join(", ")
-    };
-    let mut text = format!("{} compiled in ({})", compiled, std::env::consts::ARCH);
-    #[cfg(target_arch = "x86_64")]
-    {
-        let avx2 = if std::arch::is_x86_feature_detected!("avx2") {
-            "present"
-        } else {
-            "absent"
-        };
-        let _ = write!(text, "; chosen at run time: avx2 ({avx2} on this CPU)");
-    }
-    text
 }
 
 /// A parser that accepts exactly `values` (and their aliases, in any case, as the types'

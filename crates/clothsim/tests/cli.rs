@@ -818,13 +818,20 @@ fn simulated(args: &[&str]) -> serde_json::Value {
 }
 
 #[test]
-fn threads_and_order_are_flags_and_scene_keys_of_the_same_options() {
+fn threads_and_order_are_flags_options_and_scene_options_alike() {
     let base = simulated(&["pinned4", "--frames", "20"]);
-    // The thread count does not change the results (the solver promises it); the flag and the
-    // scene key reach the solver alike.
+    // The thread count does not change the results (the solver promises it); the shorthand,
+    // `--option` and the scene's option reach the solver alike.
     for args in [
         &["pinned4", "--frames", "20", "--threads", "2"][..],
-        &["pinned4", "--frames", "20", "--set", "simulation.threads=2"],
+        &["pinned4", "--frames", "20", "--option", "threads=2"],
+        &[
+            "pinned4",
+            "--frames",
+            "20",
+            "--set",
+            "simulation.solver_options={\"threads\": 2}",
+        ],
     ] {
         assert_eq!(simulated(args)["positions"], base["positions"], "{args:?}");
     }
@@ -838,10 +845,12 @@ fn threads_and_order_are_flags_and_scene_keys_of_the_same_options() {
         "--frames",
         "20",
         "--set",
-        "simulation.constraint_order=\"colored\"",
+        "simulation.solver_options={\"order\": \"colored\"}",
     ]);
     assert_eq!(keyed["positions"], colored["positions"]);
-    // A flag overrides the scene's option, even where the scene's two spellings agree.
+    let optioned = simulated(&["pinned4", "--frames", "20", "-O", "order=colored"]);
+    assert_eq!(optioned["positions"], colored["positions"]);
+    // A flag overrides the scene's option.
     let flagged = simulated(&[
         "pinned4",
         "--frames",
@@ -878,17 +887,10 @@ fn solver_flags_are_refused_clearly() {
     );
     let o = clothsim(&["simulate", "pinned4", "--threads", "0"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    let o = clothsim(&[
-        "simulate",
-        "pinned4",
-        "--set",
-        "simulation.threads=3",
-        "--set",
-        "simulation.solver_options={\"threads\": 2}",
-    ]);
+    let o = clothsim(&["simulate", "pinned4", "--set", "simulation.threads=3"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(
-        stderr(&o).contains("pinned4: simulation.threads is 3, but it must be the value of simulation.solver_options.threads (2)"),
+        stderr(&o).contains("pinned4: simulation.threads: no longer a scene key; write simulation.solver_options.threads"),
         "{}",
         stderr(&o)
     );
@@ -1008,4 +1010,62 @@ fn a_bad_max_memory_says_what_a_size_is() {
             "{bad}: {e}"
         );
     }
+}
+
+#[cfg(feature = "implicit")]
+#[test]
+fn options_are_never_dropped_silently() {
+    // Scene options meant for the scene's own solver, with another solver chosen.
+    let o = clothsim(&[
+        "simulate",
+        "pinned4",
+        "--frames",
+        "1",
+        "--solver",
+        "fast-implicit",
+        "--set",
+        "simulation.solver_options={\"bogus\":1}",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("simulation.solver_options.bogus (1) is an option of the scene's solver verlet, but --solver fast-implicit has no bogus option"),
+        "{}",
+        stderr(&o)
+    );
+    // An option both solvers have reaches the chosen one and is checked by it.
+    let o = clothsim(&[
+        "simulate",
+        "pinned4",
+        "--frames",
+        "1",
+        "--solver",
+        "fast-implicit",
+        "--set",
+        "simulation.solver=\"implicit\"",
+        "--set",
+        "simulation.solver_options={\"iterations\":0}",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("simulation.solver_options.iterations"),
+        "{}",
+        stderr(&o)
+    );
+    // A solver's own option from the command line, named when refused.
+    let o = clothsim(&[
+        "simulate",
+        "pinned4",
+        "--frames",
+        "1",
+        "--solver",
+        "fast-implicit",
+        "--option",
+        "iterations=0",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("--option iterations=0: "),
+        "{}",
+        stderr(&o)
+    );
 }

@@ -23,7 +23,5 @@ pub mod state_file;
 pub mod study;
 
 pub use cloth_solver::{Registry, SolverEntry};
-pub use run::{
-    COMING_APART_STRETCH, Cause, Command, Fault, HISTORY, Run, Sample, Settings, numeric_options,
-};
+pub use run::{Cause, Command, Fault, HISTORY, Run, Sample, Settings, numeric_options};
 pub use solvers::default_registry;

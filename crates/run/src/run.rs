@@ -21,11 +21,6 @@ use cloth_solver::Collider;
 /// Plot samples kept (one per simulated frame: 20 s at 90 frames/s).
 pub const HISTORY: usize = 1800;
 
-/// The largest spring stretch (length over rest length) past which a cloth swept in the
-/// faithful order is taken as coming apart when it stays there for a second: the course's
-/// limit holds springs at 1.1, and a falling cloth overshoots it by a few percent only.
-pub const COMING_APART_STRETCH: f64 = 1.5;
-
 /// One plot sample, taken at the end of each simulated frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
@@ -194,9 +189,7 @@ impl Run {
     pub fn scene_settings(&self) -> Settings {
         let entry = &self.choice.entry;
         let default = self.registry.default_entry().map_or("", SolverEntry::name);
-        let options = self
-            .scene
-            .options_for(entry.name(), default, |k| entry.option(k).is_some());
+        let options = self.scene.options_for(entry.name(), default);
         Settings {
             params: StepParams {
                 steps_per_frame: solvers::steps_for(&self.scene, entry),
@@ -293,38 +286,6 @@ impl Run {
     /// solver.
     pub fn steps_follow_solver(&self) -> bool {
         self.settings.params.steps_per_frame == solvers::steps_for(&self.scene, self.entry())
-    }
-
-    /// A hint to try the `colored` order when the active solver sweeps in the `faithful` order
-    /// and the cloth has come apart under it: its largest stretch above
-    /// [`COMING_APART_STRETCH`] in every frame of the last simulated second.
-    pub fn order_hint(&self) -> Option<String> {
-        let entry = self.entry();
-        let option = entry.option("order")?;
-        let cloth_solver::OptionKind::Choice { choices, .. } = option.kind else {
-            return None;
-        };
-        if entry.choice(self.options(), "order").ok()? != "faithful"
-            || !choices.contains(&"colored")
-        {
-            return None;
-        }
-        let fps = self.settings.params.frames_per_sec;
-        let second = fps.ceil().max(1.0) as usize;
-        let apart = self.history.len() > second
-            && self
-                .history
-                .iter()
-                .rev()
-                .take(second)
-                .all(|s| s.stretch > COMING_APART_STRETCH);
-        apart.then(|| {
-            format!(
-                "springs have stayed over {COMING_APART_STRETCH} x their rest length for a second: \
-                 the faithful sweep cannot hold this cloth; try order colored (its row below the \
-                 solver, or --order colored)"
-            )
-        })
     }
 
     /// Rebuilds the active solver with the options of [`Self::settings`]; the state carries

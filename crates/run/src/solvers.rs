@@ -71,7 +71,7 @@ pub fn choose(registry: &Registry, scene: &Scene, name: Option<&str>) -> anyhow:
         })?,
         (None, None) => *default,
     };
-    let options = scene.options_for(entry.name(), default.name(), |k| entry.option(k).is_some());
+    let options = scene.options_for(entry.name(), default.name());
     entry
         .check(&options)
         .map_err(|e| scene_option_error(scene, &e))?;
@@ -80,13 +80,9 @@ pub fn choose(registry: &Registry, scene: &Scene, name: Option<&str>) -> anyhow:
 
 /// A refused option of a scene, named by the scene's key that gave it.
 fn scene_option_error(scene: &Scene, e: &OptionError) -> anyhow::Error {
-    let alias = cloth_scene::OPTION_KEYS
-        .iter()
-        .find(|(_, option)| e.key() == Some(option) && !scene.solver_options.contains_key(*option));
-    let key = match (alias, e.key()) {
-        (Some((scene_key, _)), _) => (*scene_key).to_owned(),
-        (None, Some(key)) => format!("simulation.solver_options.{key}"),
-        (None, None) => "simulation.solver_options".to_owned(),
+    let key = match e.key() {
+        Some(key) => format!("simulation.solver_options.{key}"),
+        None => "simulation.solver_options".to_owned(),
     };
     anyhow::anyhow!("{}: {key}: {e}", scene.origin)
 }
@@ -142,27 +138,55 @@ impl Flags {
     }
 }
 
-/// Readies `scene` for a run with the flags `flags` and the solver `name` (see [`choose`]): the
-/// flags become the scene's option keys, the solver is chosen, and the steps per frame become
-/// [`steps_for`] the chosen solver.
+/// Readies `scene` for a run of the solver `name` (the scene's own when `None`, see
+/// [`choose`]) with the options `flags` gives on the command line: the chosen solver and its
+/// options become the scene's (so a live UI's "restore" and a saved scene keep them), and the
+/// steps per frame become [`steps_for`] the chosen solver.
+///
+/// Nothing is dropped silently: the scene's `solver_options` belong to the scene's own solver,
+/// so when `name` chooses another one each of them must be an option of that one too (and
+/// passes to it), or it is an error naming both solvers; a flag for an option the chosen
+/// solver does not declare is an error naming the solvers that do.
 ///
 /// # Errors
-/// What [`choose`] refuses, and a flag the chosen solver has no option for, naming the flag,
-/// the solver and the solvers that take it.
+/// What [`choose`] refuses, scene options meant for another solver, and flags the chosen
+/// solver has no option for or refuses.
 pub fn prepare(
     registry: &Registry,
     scene: &mut Scene,
     name: Option<&str>,
     flags: &Flags,
 ) -> anyhow::Result<Choice> {
-    let given = &flags.given;
-    for (_, option, value) in given {
-        scene.override_option(option, value);
+    let default = registry
+        .default_entry()
+        .context("this clothsim has no solvers registered")?;
+    let own = scene
+        .solver
+        .clone()
+        .unwrap_or_else(|| default.name().to_owned());
+    let mut choice = choose(registry, scene, name)?;
+    let entry = choice.entry;
+    let own_entry = registry.get(&own).ok().copied();
+    if own_entry.is_none_or(|e| e.name() != entry.name()) && !scene.solver_options.is_empty() {
+        for (key, value) in &scene.solver_options {
+            if entry.option(key).is_none() {
+                anyhow::bail!(
+                    "{}: simulation.solver_options.{key} ({value}) is an option of the scene's \
+                     solver {own}, but --solver {} has no {key} option; remove it from the \
+                     scene, or run {own}",
+                    scene.origin,
+                    entry.name()
+                );
+            }
+        }
+        choice.options = Value::Object(scene.solver_options.clone());
+        entry
+            .check(&choice.options)
+            .map_err(|e| scene_option_error(scene, &e))?;
     }
-    // The chosen solver checks the values as options of the scene, naming the scene's key.
-    let choice = choose(registry, scene, name)?;
-    for (flag, option, _) in given {
-        if choice.entry.option(option).is_none() {
+    let mut options = choice.options.as_object().cloned().unwrap_or_default();
+    for (flag, option, value) in &flags.given {
+        if entry.option(option).is_none() {
             let with: Vec<&str> = registry
                 .entries()
                 .iter()
@@ -171,7 +195,7 @@ pub fn prepare(
                 .collect();
             anyhow::bail!(
                 "{flag}: the {} solver has no {option} option (solvers with one: {})",
-                choice.entry.name(),
+                entry.name(),
                 if with.is_empty() {
                     "none".to_owned()
                 } else {
@@ -179,9 +203,17 @@ pub fn prepare(
                 }
             );
         }
+        options.insert(option.clone(), value.clone());
+        entry
+            .check(&Value::Object(options.clone()))
+            .map_err(|e| anyhow::anyhow!("{flag}: {e}"))?;
     }
-    scene.params.steps_per_frame = steps_for(scene, &choice.entry);
-    Ok(choice)
+    scene.set_solver(entry.name(), options.clone());
+    scene.params.steps_per_frame = steps_for(scene, &entry);
+    Ok(Choice {
+        entry,
+        options: Value::Object(options),
+    })
 }
 
 /// The text of `clothsim solvers`: each solver's name, description and steps per frame, then
@@ -291,25 +323,50 @@ mod tests {
 
     #[cfg(feature = "implicit")]
     #[test]
-    fn the_old_iterations_key_reaches_fast_implicit_and_is_named_when_bad() {
+    fn options_meant_for_another_solver_are_an_error_naming_both() {
         let registry = default_registry();
-        let s = scene(&[
-            "simulation.solver=\"fast-implicit\"",
-            "simulation.iterations=4",
-        ]);
-        let c = choose(&registry, &s, None).unwrap();
+        // The scene's options are verlet's (it names no solver); fast-implicit has no `bogus`.
+        let mut s = scene(&["simulation.solver_options={\"bogus\": 1}"]);
+        let e = prepare(&registry, &mut s, Some("fast-implicit"), &Flags::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("pinned4: simulation.solver_options.bogus (1) is an option of the scene's solver verlet, but --solver fast-implicit has no bogus option"),
+            "{e}"
+        );
+        // An option both have passes on, and is checked by the chosen solver.
+        let mut s = scene(&["simulation.solver_options={\"iterations\": 0}"]);
+        let registry = Registry::new()
+            .with(cloth_implicit::FastImplicit::ENTRY)
+            .with(cloth_implicit::ImplicitEuler::ENTRY);
+        let e = prepare(&registry, &mut s, Some("implicit"), &Flags::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("simulation.solver_options.iterations"), "{e}");
+    }
+
+    #[cfg(feature = "implicit")]
+    #[test]
+    fn a_flag_reaches_the_chosen_solver_and_is_checked_by_it() {
+        let registry = default_registry();
+        let mut s = scene(&[]);
+        let flags = Flags::default().with("--option iterations=4", "iterations", 4.into());
+        let c = prepare(&registry, &mut s, Some("fast-implicit"), &flags).unwrap();
         assert_eq!(c.options, serde_json::json!({"iterations": 4}));
-        // Verlet has no `iterations`, so the alias does not reach it.
-        let c = choose(&registry, &s, Some("verlet")).unwrap();
-        assert_eq!(c.options, serde_json::json!({}));
-        let s = scene(&[
-            "simulation.solver=\"fast-implicit\"",
-            "simulation.solver_options={\"iterations\": 0}",
-        ]);
-        let e = choose(&registry, &s, None).unwrap_err().to_string();
-        assert_eq!(
-            e,
-            "pinned4: simulation.solver_options.iterations: the fast-implicit solver's option iterations is 0, but it must be an integer from 1 to 1000"
+        // The choice becomes the scene's, so a run built from it (the UI's restore) keeps it.
+        assert_eq!(s.options_for("fast-implicit", "verlet"), c.options);
+        let flags = Flags::default().with("--option iterations=0", "iterations", 0.into());
+        let e = prepare(&registry, &mut scene(&[]), Some("fast-implicit"), &flags)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("--option iterations=0: "), "{e}");
+        let flags = Flags::default().with("--option bogus=1", "bogus", 1.into());
+        let e = prepare(&registry, &mut scene(&[]), Some("fast-implicit"), &flags)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("--option bogus=1: the fast-implicit solver has no bogus option"),
+            "{e}"
         );
     }
 }

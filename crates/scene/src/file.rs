@@ -129,21 +129,18 @@ pub struct SimulationBlock {
     /// solver chosen on the command line or in the UI.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solver_options: Option<serde_json::Map<String, serde_json::Value>>,
-    /// The older spelling of the `iterations` solver option, still read: it sets the
-    /// `iterations` option of any solver that has one (`fast-implicit`) unless `solver_options`
-    /// sets it; solvers without one ignore it. An integer from 1 to 1000.
+    /// A retired spelling of `solver_options.iterations`: read only to be refused with the
+    /// spelling that replaced it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub iterations: Option<u64>,
-    /// Worker threads: another spelling of the `threads` solver option (Verlet's), for any
-    /// solver that has one. Giving it and `solver_options.threads` with different values is an
-    /// error; with the same value, either may go.
+    pub iterations: Option<serde_json::Value>,
+    /// A retired spelling of `solver_options.threads`: read only to be refused with the
+    /// spelling that replaced it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub threads: Option<u64>,
-    /// The constraint order (`faithful`, `parallel` or `colored` for Verlet): another spelling of
-    /// the `order` solver option, for any solver that has one. Giving it and
-    /// `solver_options.order` with different values is an error.
+    pub threads: Option<serde_json::Value>,
+    /// A retired spelling of `solver_options.order`: read only to be refused with the spelling
+    /// that replaced it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub constraint_order: Option<String>,
+    pub constraint_order: Option<serde_json::Value>,
     /// Seed of the vertical cloth's z-jitter (default 184).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,

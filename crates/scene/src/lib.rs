@@ -4,9 +4,9 @@
 //! unknown keys are errors, as in the course's loader, so typos are caught. clothsim adds a few
 //! optional keys of its own (all documented on [`SceneFile`]): a top-level `description`, and a
 //! `simulation` block with `frames_per_sec`, `simulation_steps`, `gravity`, `self_collision`,
-//! `stretch_limit`, `solver`, `solver_options`, `iterations`, `threads` and `constraint_order`
-//! (scene keys of the `iterations`, `threads` and `order` solver options, see [`OPTION_KEYS`])
-//! and `seed`, so one file fully describes a run.
+//! `stretch_limit`, `solver`, `solver_options` (the options of that solver, whatever they are)
+//! and `seed`, so one file fully describes a run. The retired keys `iterations`, `threads` and
+//! `constraint_order` are refused with the spelling that replaced them.
 //!
 //! This crate knows no solvers: it keeps the solver's name and options as written, and the
 //! application checks them against the solvers it was built with.
@@ -28,4 +28,4 @@ pub use error::SceneError;
 pub use file::{ClothBlock, PlaneBlock, SceneFile, SimulationBlock, SphereBlock};
 pub use overrides::apply_set;
 pub use read::{MAX_SCENE_BYTES, check_scene_path, read_scene_file};
-pub use scene::{OPTION_KEYS, Scene, load, parse, shadowing_file};
+pub use scene::{Scene, load, parse, shadowing_file};

@@ -33,23 +33,14 @@ pub struct Scene {
     /// The options for that solver (`simulation.solver_options`; empty when absent), checked by
     /// the solver itself when it is built.
     pub solver_options: Map<String, Value>,
-    /// `simulation.iterations`, the older spelling of the `iterations` solver option (see
-    /// [`Scene::options_for`]).
-    pub iterations: Option<u32>,
-    /// `simulation.threads`, the scene key of the `threads` solver option (see
-    /// [`Scene::options_for`]).
-    pub threads: Option<u64>,
-    /// `simulation.constraint_order`, the scene key of the `order` solver option (see
-    /// [`Scene::options_for`]).
-    pub constraint_order: Option<String>,
 }
 
-/// The scene keys that spell a solver option: `(scene key, option)`. Each fills in its option,
-/// for a solver that has it, when `simulation.solver_options` leaves it out.
-pub const OPTION_KEYS: [(&str, &str); 3] = [
-    ("simulation.iterations", "iterations"),
-    ("simulation.threads", "threads"),
-    ("simulation.constraint_order", "order"),
+/// Scene keys that once spelled a solver option, and the option's name: each is refused with
+/// the spelling that replaced it, `simulation.solver_options.OPTION`.
+const RETIRED_KEYS: [(&str, &str); 3] = [
+    ("iterations", "iterations"),
+    ("threads", "threads"),
+    ("constraint_order", "order"),
 ];
 
 impl Scene {
@@ -57,41 +48,14 @@ impl Scene {
     ///
     /// `simulation.solver_options` belongs to the scene's own solver (the default one when the
     /// scene names none, whose name the caller passes as `default`), so another solver gets
-    /// none of them. The scene keys of [`OPTION_KEYS`] (`simulation.iterations`,
-    /// `simulation.threads`, `simulation.constraint_order`) fill in their option when
-    /// `solver_options` leaves it out, for any solver that `has_option` it.
+    /// none of them.
     #[must_use]
-    pub fn options_for(
-        &self,
-        name: &str,
-        default: &str,
-        has_option: impl Fn(&str) -> bool,
-    ) -> Value {
+    pub fn options_for(&self, name: &str, default: &str) -> Value {
         let own = self.solver.as_deref().unwrap_or(default);
-        let mut options = if own == name {
-            self.solver_options.clone()
+        if own == name {
+            Value::Object(self.solver_options.clone())
         } else {
-            Map::new()
-        };
-        for (_, key) in OPTION_KEYS {
-            if let Some(v) = self.option_key(key)
-                && has_option(key)
-                && !options.contains_key(key)
-            {
-                options.insert(key.to_owned(), v);
-            }
-        }
-        Value::Object(options)
-    }
-
-    /// The value the scene key of the solver option `option` gives (see [`OPTION_KEYS`]).
-    #[must_use]
-    pub fn option_key(&self, option: &str) -> Option<Value> {
-        match option {
-            "iterations" => self.iterations.map(Value::from),
-            "threads" => self.threads.map(Value::from),
-            "order" => self.constraint_order.clone().map(Value::from),
-            _ => None,
+            Value::Object(Map::new())
         }
     }
 
@@ -105,22 +69,12 @@ impl Scene {
             .is_some_and(|s| s.simulation_steps.is_some())
     }
 
-    /// Sets the solver option `option` (`threads`, `order`) for every solver that has it, as a
-    /// command-line flag does: the scene key of [`OPTION_KEYS`] takes `value`, and the scene's
-    /// own `solver_options` entry for it goes.
-    pub fn override_option(&mut self, option: &str, value: &Value) {
-        match option {
-            "iterations" => self.iterations = value.as_u64().map(|v| v as u32),
-            "threads" => self.threads = value.as_u64(),
-            "order" => self.constraint_order = value.as_str().map(str::to_owned),
-            _ => return,
-        }
-        self.solver_options.remove(option);
-        if let Some(sim) = self.file.simulation.as_mut()
-            && let Some(options) = sim.solver_options.as_mut()
-        {
-            options.remove(option);
-        }
+    /// Makes `solver` the scene's solver, with `options` (a JSON object) as its options: what
+    /// a run chose on the command line becomes what the scene gives, so the live UI's
+    /// "restore" and a saved scene keep it.
+    pub fn set_solver(&mut self, solver: &str, options: Map<String, Value>) {
+        self.solver = Some(solver.to_owned());
+        self.solver_options = options;
     }
 
     /// The scene's file with `params`, `colliders`' friction, the solver `solver` and its
@@ -166,17 +120,6 @@ impl Scene {
         .then_some(params.stretch_limit);
         sim.solver = Some(solver.to_owned());
         let options = options.as_object().cloned().unwrap_or_default();
-        // NOTE: the options now say these; a scene key would only shadow (or contradict) the
-        // option of another solver chosen later, so it goes.
-        if options.contains_key("iterations") {
-            sim.iterations = None;
-        }
-        if options.contains_key("threads") {
-            sim.threads = None;
-        }
-        if options.contains_key("order") {
-            sim.constraint_order = None;
-        }
         sim.solver_options = (!options.is_empty()).then_some(options);
         f.simulation = Some(sim);
         f
@@ -451,6 +394,23 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         constraint_order,
         seed,
     } = sim;
+    for ((key, option), given) in
+        RETIRED_KEYS
+            .iter()
+            .zip([&iterations, &threads, &constraint_order])
+    {
+        if given.is_some() {
+            return Err(SceneError::Field {
+                origin: origin.to_owned(),
+                key: format!("simulation.{key}"),
+                message: format!(
+                    "no longer a scene key; write simulation.solver_options.{option} (an option \
+                     of the scene's solver; `clothsim solvers` lists each solver's options)"
+                ),
+                location: None,
+            });
+        }
+    }
     let defaults = StepParams::default();
     let frames_per_sec = match frames_per_sec {
         Some(f) => ck.range(
@@ -472,38 +432,7 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         }
         None => defaults.steps_per_frame,
     };
-    let iterations = match iterations {
-        Some(s) if (1..=1000).contains(&s) => Some(s as u32),
-        Some(s) => return Err(ck.fail("simulation.iterations", s, "an integer from 1 to 1000")),
-        None => None,
-    };
     let solver_options = solver_options.unwrap_or_default();
-    if let Some(t) = threads
-        && t == 0
-    {
-        return Err(ck.fail("simulation.threads", t, "an integer >= 1"));
-    }
-    for (key, option, value) in [
-        ("simulation.threads", "threads", threads.map(Value::from)),
-        (
-            "simulation.constraint_order",
-            "order",
-            constraint_order.clone().map(Value::from),
-        ),
-    ] {
-        if let (Some(v), Some(given)) = (&value, solver_options.get(option))
-            && !same_value(v, given)
-        {
-            return Err(ck.fail(
-                key,
-                v,
-                &format!(
-                    "the value of simulation.solver_options.{option} ({given}), which it is \
-                     another spelling of; give one of the two"
-                ),
-            ));
-        }
-    }
     let gravity = match gravity {
         Some(g) => ck.vec3("simulation.gravity", g)?,
         None => defaults.gravity,
@@ -569,18 +498,7 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         colliders,
         solver,
         solver_options,
-        iterations,
-        threads,
-        constraint_order,
     })
-}
-
-/// Whether two JSON values say the same option value (`2` and `2.0` do).
-fn same_value(a: &Value, b: &Value) -> bool {
-    match (a.as_f64(), b.as_f64()) {
-        (Some(x), Some(y)) => x == y,
-        _ => a == b,
-    }
 }
 
 fn mesh_error(origin: &str, e: &MeshError) -> SceneError {

@@ -48,6 +48,7 @@ pub use registry::{
     UnknownSolver, default_memory_estimate,
 };
 pub use self_collision::SpatialHash;
+pub use simd::vector_paths;
 pub use stretch::limit_stretch;
 pub use verlet::{ConstraintOrder, Verlet};
 

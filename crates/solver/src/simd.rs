@@ -36,6 +36,44 @@ impl Simd {
     }
 }
 
+/// The vector instruction sets the solver's kernels use on this build and this CPU: those the
+/// compiler was allowed to use everywhere, and on x86-64 the wider ones the kernels choose at
+/// run time when the CPU has them (what `--version` reports).
+#[must_use]
+pub fn vector_paths() -> String {
+    let mut compiled = Vec::new();
+    for (on, name) in [
+        (cfg!(target_feature = "sse2"), "sse2"),
+        (cfg!(target_feature = "avx2"), "avx2"),
+        (cfg!(target_feature = "fma"), "fma"),
+        (cfg!(target_feature = "avx512f"), "avx512f"),
+        (cfg!(target_feature = "neon"), "neon"),
+    ] {
+        if on {
+            compiled.push(name);
+        }
+    }
+    let compiled = if compiled.is_empty() {
+        "none".to_owned()
+    } else {
+        compiled.join(", ")
+    };
+    #[allow(unused_mut)]
+    let mut text = format!("{} compiled in ({})", compiled, std::env::consts::ARCH);
+    #[cfg(target_arch = "x86_64")]
+    {
+        let avx2 = if Simd::detect().avx2().is_some() {
+            "present"
+        } else {
+            "absent"
+        };
+        text.push_str("; chosen at run time: avx2 (");
+        text.push_str(avx2);
+        text.push_str(" on this CPU)");
+    }
+    text
+}
+
 impl Default for Simd {
     /// [`Simd::detect`]: a solver built by default uses what the CPU runs.
     fn default() -> Self {

@@ -262,8 +262,6 @@ pub struct App {
     pub saved: (Settings, &'static str),
     /// Say where the cloth is once the single frame asked for arrives.
     pub step_note: bool,
-    /// Whether the hint to try the colored order was given while its cause holds.
-    pub order_hinted: bool,
     /// A scene waiting for the answer to "this cloth is big: open it?".
     pub big: Option<Box<cloth_scene::Scene>>,
     /// How a worker tells the loop it has something new (set by the loop; `None` in tests).
@@ -295,7 +293,6 @@ impl App {
             suspend: false,
             mouse: true,
             step_note: false,
-            order_hinted: false,
             worker: None,
             recording: None,
             notify: None,

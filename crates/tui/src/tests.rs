@@ -985,10 +985,7 @@ fn the_order_flag_and_scene_key_reach_the_ui_and_its_row() {
         ),
         (
             cloth_run::solvers::Flags::default(),
-            vec![
-                "simulation.threads=2".to_owned(),
-                "simulation.constraint_order=\"colored\"".to_owned(),
-            ],
+            vec!["simulation.solver_options={\"threads\": 2, \"order\": \"colored\"}".to_owned()],
         ),
     ] {
         let args = Args {
@@ -1014,44 +1011,6 @@ fn the_order_flag_and_scene_key_reach_the_ui_and_its_row() {
     }
 }
 
-#[test]
-fn a_cloth_coming_apart_under_the_faithful_order_gets_a_hint_to_try_colored() {
-    let mut app = app_with("pinned4", true);
-    let second = 90;
-    let apart = |stretch| cloth_run::Sample {
-        time: 0.0,
-        kinetic: 0.0,
-        stretch,
-    };
-    // A second minus one frame above 1.5 is not yet "for a second".
-    app.sim.history.extend((0..second - 1).map(|_| apart(1.6)));
-    update::hint_order(&mut app);
-    assert!(app.note.is_none(), "{:?}", app.note);
-    app.sim.history.push_back(apart(1.6));
-    update::hint_order(&mut app);
-    let note = app.note.clone().expect("the hint");
-    assert_eq!(note.level, super::model::Level::Warn);
-    assert!(note.text.contains("try order colored"), "{}", note.text);
-    // Said once while it holds.
-    app.note = None;
-    update::hint_order(&mut app);
-    assert!(app.note.is_none());
-    // A frame back under the limit ends it; under colored there is no hint at all.
-    app.sim.history.push_back(apart(1.2));
-    update::hint_order(&mut app);
-    assert!(!app.order_hinted);
-    while app.selected != PARAMS.len() + 1 {
-        press(&mut app, KeyCode::Down);
-    }
-    press(&mut app, KeyCode::Left);
-    assert_eq!(app.sim.options()["order"], "colored");
-    app.note = None;
-    app.sim.history.extend((0..2 * second).map(|_| apart(3.0)));
-    update::hint_order(&mut app);
-    assert!(app.note.is_none(), "{:?}", app.note);
-}
-
-#[cfg(feature = "implicit")]
 #[test]
 fn switching_solver_takes_its_steps_unless_they_were_edited_or_given() {
     let mut app = app_with("pinned4", true);

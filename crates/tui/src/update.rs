@@ -313,21 +313,7 @@ pub fn run_owed(app: &mut App, more: &mut dyn FnMut() -> bool) -> u64 {
             break;
         }
     }
-    hint_order(app);
     n
-}
-
-/// Says once, while it holds, that the cloth is coming apart under the faithful order and
-/// `colored` may hold it (see [`cloth_run::Run::order_hint`]).
-pub fn hint_order(app: &mut App) {
-    match app.sim.order_hint() {
-        Some(hint) if !app.order_hinted => {
-            app.order_hinted = true;
-            app.say(Level::Warn, hint);
-        }
-        Some(_) => {}
-        None => app.order_hinted = false,
-    }
 }
 
 /// The simulation failed: pause and explain. (In compare mode a variant stops alone, greyed
@@ -534,7 +520,6 @@ pub fn adopt(app: &mut App) -> bool {
     for e in got.errors {
         app.say(Level::Error, e);
     }
-    hint_order(app);
     if app.sim.fault.is_some() && app.running {
         stopped(app);
     } else if !got.running && app.running && app.sim.fault.is_none() {
@@ -1191,7 +1176,6 @@ fn start_scene(app: &mut App, scene: cloth_scene::Scene) {
         let mut plain = scene;
         plain.solver = None;
         plain.solver_options.clear();
-        plain.iterations = None;
         Run::new(plain, registry, None)
     });
     match result {

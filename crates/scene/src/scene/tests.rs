@@ -304,57 +304,45 @@ fn scene_options_belong_to_the_scenes_own_solver() {
         "simulation.solver=\"fast-implicit\"",
         "simulation.solver_options={\"iterations\": 4}",
     ]);
-    let yes = |_: &str| true;
     assert_eq!(
-        s.options_for("fast-implicit", "verlet", yes),
+        s.options_for("fast-implicit", "verlet"),
         serde_json::json!({"iterations": 4})
     );
-    assert_eq!(
-        s.options_for("verlet", "verlet", yes),
-        serde_json::json!({})
-    );
+    assert_eq!(s.options_for("verlet", "verlet"), serde_json::json!({}));
     // A scene naming no solver gives its options to the default one.
     let s = with(&["simulation.solver_options={\"threads\": 2}"]);
     assert_eq!(
-        s.options_for("verlet", "verlet", yes),
+        s.options_for("verlet", "verlet"),
         serde_json::json!({"threads": 2})
     );
-    assert_eq!(s.options_for("xpbd", "verlet", yes), serde_json::json!({}));
+    assert_eq!(s.options_for("xpbd", "verlet"), serde_json::json!({}));
 }
 
 #[test]
-fn the_old_iterations_key_fills_in_the_iterations_option_of_a_solver_that_has_one() {
-    let s = load("pinned4", &["simulation.iterations=7".to_owned()]).unwrap();
-    assert_eq!(s.iterations, Some(7));
-    let has = |k: &str| k == "iterations";
-    let lacks = |_: &str| false;
-    assert_eq!(
-        s.options_for("fast-implicit", "verlet", has),
-        serde_json::json!({"iterations": 7})
-    );
-    assert_eq!(
-        s.options_for("verlet", "verlet", lacks),
-        serde_json::json!({})
-    );
-    // `solver_options` wins over the alias.
-    let s = load(
-        "pinned4",
-        &[
-            "simulation.iterations=7".to_owned(),
-            "simulation.solver=\"fast-implicit\"".to_owned(),
-            "simulation.solver_options={\"iterations\": 3}".to_owned(),
-        ],
-    )
-    .unwrap();
-    assert_eq!(
-        s.options_for("fast-implicit", "verlet", has),
-        serde_json::json!({"iterations": 3})
-    );
-    let e = err(&["simulation.iterations=0"]);
-    assert!(
-        e.contains("simulation.iterations is 0, but it must be an integer from 1 to 1000"),
-        "{e}"
-    );
+fn the_retired_option_keys_are_refused_with_the_spelling_that_replaced_them() {
+    for (set, key, option) in [
+        (
+            "simulation.iterations=7",
+            "simulation.iterations",
+            "iterations",
+        ),
+        ("simulation.threads=2", "simulation.threads", "threads"),
+        (
+            "simulation.constraint_order=\"colored\"",
+            "simulation.constraint_order",
+            "order",
+        ),
+    ] {
+        let e = err(&[set]);
+        assert!(
+            e.starts_with(&format!("pinned4: {key}: no longer a scene key")),
+            "{set}: {e}"
+        );
+        assert!(
+            e.contains(&format!("write simulation.solver_options.{option}")),
+            "{set}: {e}"
+        );
+    }
 }
 
 #[test]
@@ -366,107 +354,9 @@ fn a_saved_scene_keeps_its_solver_and_options() {
     let back = parse(&text, "saved.json", &[]).unwrap();
     assert_eq!(back.solver.as_deref(), Some("fast-implicit"));
     assert_eq!(Value::Object(back.solver_options.clone()), options);
-    assert_eq!(back.iterations, None);
     // No options: no `solver_options` key at all.
     let file = s.to_file(&s.params, &s.colliders, "verlet", &serde_json::json!({}));
     assert!(file.simulation.unwrap().solver_options.is_none());
-}
-
-#[test]
-fn threads_and_constraint_order_are_scene_keys_of_the_solver_options() {
-    let s = load(
-        "pinned4",
-        &[
-            "simulation.threads=2".to_owned(),
-            "simulation.constraint_order=\"colored\"".to_owned(),
-        ],
-    )
-    .unwrap();
-    let verlet = |k: &str| k == "threads" || k == "order";
-    assert_eq!(
-        s.options_for("verlet", "verlet", verlet),
-        serde_json::json!({"threads": 2, "order": "colored"})
-    );
-    // They reach any solver with those options, not only the scene's own (as the options
-    // object does), and no solver without them.
-    assert_eq!(
-        s.options_for("other", "verlet", verlet),
-        serde_json::json!({"threads": 2, "order": "colored"})
-    );
-    assert_eq!(
-        s.options_for("fast-implicit", "verlet", |k| k == "iterations"),
-        serde_json::json!({})
-    );
-    let e = err(&["simulation.threads=0"]);
-    assert!(
-        e.contains("simulation.threads is 0, but it must be an integer >= 1"),
-        "{e}"
-    );
-    let e = err(&["simulation.constraint_order=3"]);
-    assert!(
-        e.contains("simulation.constraint_order: invalid type"),
-        "{e}"
-    );
-}
-
-#[test]
-fn a_scene_key_and_its_option_may_agree_but_not_disagree() {
-    let agree = load(
-        "pinned4",
-        &[
-            "simulation.threads=2".to_owned(),
-            "simulation.solver_options={\"threads\": 2.0, \"order\": \"parallel\"}".to_owned(),
-            "simulation.constraint_order=\"parallel\"".to_owned(),
-        ],
-    );
-    assert!(agree.is_ok(), "{:?}", agree.err());
-    let e = err(&[
-        "simulation.threads=4",
-        "simulation.solver_options={\"threads\": 2}",
-    ]);
-    assert_eq!(
-        e,
-        "pinned4: simulation.threads is 4, but it must be the value of \
-         simulation.solver_options.threads (2), which it is another spelling of; give one of the two"
-    );
-    let e = err(&[
-        "simulation.constraint_order=\"colored\"",
-        "simulation.solver_options={\"order\": \"faithful\"}",
-    ]);
-    assert!(
-        e.starts_with(
-            "pinned4: simulation.constraint_order is \"colored\", but it must be the value of \
-             simulation.solver_options.order (\"faithful\")"
-        ),
-        "{e}"
-    );
-}
-
-#[test]
-fn an_override_replaces_both_spellings_and_a_saved_scene_keeps_one() {
-    let mut s = load(
-        "pinned4",
-        &[
-            "simulation.threads=2".to_owned(),
-            "simulation.solver_options={\"order\": \"parallel\"}".to_owned(),
-        ],
-    )
-    .unwrap();
-    s.override_option("order", &Value::from("colored"));
-    s.override_option("threads", &Value::from(3));
-    let all = |_: &str| true;
-    assert_eq!(
-        s.options_for("verlet", "verlet", all),
-        serde_json::json!({"threads": 3, "order": "colored"})
-    );
-    // Saved with the options a run used, the scene keys give way to them, so the file
-    // reloads without a disagreement.
-    let options = serde_json::json!({"threads": 1, "order": "faithful"});
-    let file = s.to_file(&s.params, &s.colliders, "verlet", &options);
-    let text = serde_json::to_string(&file).unwrap();
-    let back = parse(&text, "saved.json", &[]).unwrap();
-    assert_eq!((back.threads, back.constraint_order), (None, None));
-    assert_eq!(Value::Object(back.solver_options), options);
 }
 
 #[test]
