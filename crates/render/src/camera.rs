@@ -457,7 +457,8 @@ pub struct Camera {
 impl Camera {
     /// The camera of `spec` for a `width` x `height` pixel grid whose pixels are `aspect` times
     /// taller than wide. `content` is what an auto-fitted view frames (ignored by a fixed extent
-    /// and by orbit).
+    /// and by an orbit not fitted). A fitted orbit gets `spec.margin` as it is; the
+    /// [`Renderer`](crate::Renderer) raises it to whole cells first ([`ViewSpec::orbit_in`]).
     ///
     /// # Errors
     /// [`RenderError::BadOption`] for a bad margin, aspect or orbit.
