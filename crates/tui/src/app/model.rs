@@ -226,8 +226,8 @@ pub struct App {
     /// Whether the orbit camera is fitted to `extent` (the course's direction, refitted as the
     /// extent grows); turning or zooming makes it the user's, `0` fits it again.
     pub orbit_fitted: bool,
-    /// The region every fixed view frames: grows to hold the cloth, so the picture does not
-    /// rescale every frame; a reset or a new scene starts it again.
+    /// The region every view frames (the orbit while fitted): grows to hold the cloth, so the
+    /// picture does not rescale every frame; a reset or a new scene starts it again.
     pub extent: Option<Bounds>,
     /// First line of the help overlay shown (when it does not fit).
     pub help_scroll: u16,
