@@ -214,11 +214,13 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     // One pass: frames are written as they are made. A single frame is fitted on its own. For
     // an animation, the extent starts as where the scene can take the cloth (see
     // `predicted_extent`), so the views keep one scale, and grows should the cloth go further.
+    // The orbit view also frames the start, as the live UI's does (see `orbit_extent`).
     let mut extent = if printed_count(args.frames, args.every) > 1 {
         Some(predicted_extent(&scene, &start, args.frames)?)
     } else {
         None
     };
+    let start_box = Bounds::of_scene(&start.positions, &scene.colliders)?;
     let mut renderer = Renderer::new();
     let mut panels: Vec<AsciiFrame> = views.iter().map(|_| AsciiFrame::new(args.size)).collect();
     let mut text = String::new();
@@ -245,7 +247,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         }
         for (view, panel) in views.iter().zip(panels.iter_mut()) {
             let spec = ViewSpec {
-                extent: Extent::Fixed(fitted),
+                extent: Extent::Fixed(orbit_extent(*view, fitted, &start_box)),
                 ..ViewSpec::new(*view, &scene.mesh)
             };
             renderer.render(&scene.mesh, state, &scene.colliders, &spec, &options, panel)?;
@@ -299,6 +301,11 @@ fn run_study(args: &Args, registry: &Registry, depth: ColorDepth) -> anyhow::Res
             Some(path) => StateFile::read(path, &v.scene.mesh, v.scene.params.dt())?.1,
             None => ClothState::new(&v.scene.mesh),
         });
+    }
+    let mut start_box: Option<Bounds> = None;
+    for (v, start) in variants.iter().zip(&starts) {
+        let b = Bounds::of_scene(&start.positions, &v.scene.colliders)?;
+        start_box = Some(start_box.map_or(b, |a| a.union(&b)));
     }
     let mut runs = Vec::with_capacity(variants.len());
     for (v, start) in variants.iter().zip(&starts) {
@@ -354,7 +361,7 @@ fn run_study(args: &Args, registry: &Registry, depth: ColorDepth) -> anyhow::Res
         for (run, panel) in runs.iter().zip(panels.iter_mut()) {
             let scene = &run.variant.scene;
             let spec = ViewSpec {
-                extent: Extent::Fixed(fitted),
+                extent: Extent::Fixed(start_box.map_or(fitted, |b| orbit_extent(view, fitted, &b))),
                 ..ViewSpec::new(view, &scene.mesh)
             };
             renderer.render(
@@ -437,6 +444,19 @@ fn grid(
         side_by_side_titled(&labels, row, size, depth, out)?;
     }
     Ok(())
+}
+
+/// The box `view` is fitted to, given the box of the frames shown (`fitted`) and of the start:
+/// the orbit view frames the start too, so that its camera, which keeps the course's direction,
+/// still sees a cloth that has come to rest flat on a floor from above its starting height, as
+/// the live UI's orbit view (fitted to the run so far) sees it; the orthographic views frame
+/// what is shown.
+fn orbit_extent(view: View, fitted: Bounds, start: &Bounds) -> Bounds {
+    if view == View::Orbit {
+        fitted.union(start)
+    } else {
+        fitted
+    }
 }
 
 /// Where the scene can take the cloth in `frames` frames, as the box the views are fitted to.

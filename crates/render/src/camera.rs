@@ -12,6 +12,14 @@
 //! `side` is the course's default camera direction; `top` is `side` tilted down by 90 degrees
 //! (so the side camera's position, +z, is at the bottom of the top view) and `bottom` is `side`
 //! tilted up by 90 degrees. `orbit` is a perspective camera on a sphere around a target.
+//!
+//! Fitting: an orthographic view scales and centres its extent (a box) to fill the frame less a
+//! margin. A fitted orbit ([`ViewSpec::fit_orbit`], the default) keeps its direction (the
+//! course's, looking along -z, unless turned) and field of view, and moves its target and
+//! distance so that the same box fills the frame less the margin, centred, with at least
+//! [`ViewSpec::ORBIT_MARGIN_CELLS`] cells empty on each side ([`Orbit::fitted`]). The picture
+//! then moves only when the extent does: a front end keeps it still by passing a fixed extent
+//! that grows only when the cloth leaves it.
 
 use std::fmt;
 use std::str::FromStr;
@@ -119,7 +127,8 @@ impl fmt::Display for View {
     }
 }
 
-/// What an orthographic view is fitted to.
+/// What a view is fitted to: the box an orthographic view fills, and the box a fitted orbit
+/// ([`ViewSpec::fit_orbit`]) frames.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Extent {
     /// Fit every frame to what is there now ([`Bounds::of_scene`]): the picture is as large as
@@ -167,30 +176,79 @@ impl Orbit {
         }
     }
 
-    /// A camera that frames the whole scene from slightly above: the cloth at its start,
-    /// every sphere, and room below the cloth to sag or fall by half its size, looking along
-    /// -z (the course's direction) from 20 degrees up, far enough that the sphere around all
-    /// of it fits the 40 degree vertical field of view (so nothing is cut at any yaw).
+    /// This orbit's yaw, pitch and field of view, with the target and distance that fit
+    /// `bounds` to a frame `frame_aspect` times wider than tall (as seen: columns over rows
+    /// times the cell aspect), less `margin` (a fraction of the frame) on each side.
+    ///
+    /// The eye is as near as it can be with every corner of the box inside that window, and
+    /// placed across the line of sight so that the box's picture is centred in the frame; the
+    /// target is the box's middle along the line of sight, so turning circles the scene.
+    /// Everything inside the box is then inside the window too: seen from outside it, a
+    /// convex box's inside projects inside its corners' outline. `margin` is clamped to 0 to
+    /// 0.45; a non-finite or non-positive `frame_aspect`, or a box with no finite size, gives
+    /// this orbit back unchanged.
     #[must_use]
-    pub fn framing(mesh: &ClothMesh, colliders: &[cloth_mesh::Collider]) -> Self {
-        let course = Self::course_default(mesh);
-        let Ok(b) = Bounds::of_solids(mesh.start_positions(), colliders) else {
-            return course;
+    pub fn fitted(&self, bounds: &Bounds, frame_aspect: f64, margin: f64) -> Self {
+        let (forward, right, up) = self.basis();
+        let usable = 1.0 - 2.0 * margin.clamp(0.0, 0.45);
+        // Half the window's height and width over the depth, after the margin.
+        let tan_v = usable * (0.5 * self.vfov).tan();
+        let tan_h = tan_v * frame_aspect;
+        let diagonal = bounds.diagonal();
+        if !(tan_h.is_finite() && tan_h > 0.0 && tan_v > 0.0 && diagonal.is_finite()) {
+            return *self;
+        }
+        // Per axis, a corner at (a, c) (across, along the line of sight) is inside the window
+        // seen from (e, ec) when |a - e| <= tan (c - ec): the eye must keep
+        // e - tan ec >= max(a - tan c) and e + tan ec <= min(a + tan c).
+        let mut lo = [f64::NEG_INFINITY; 2];
+        let mut hi = [f64::INFINITY; 2];
+        let (mut near, mut far) = (f64::INFINITY, f64::NEG_INFINITY);
+        for corner in bounds.corners() {
+            let c = corner.dot(&forward);
+            for (k, (axis, t)) in [(right, tan_h), (up, tan_v)].into_iter().enumerate() {
+                let a = corner.dot(&axis);
+                lo[k] = lo[k].max(a - t * c);
+                hi[k] = hi[k].min(a + t * c);
+            }
+            near = near.min(c);
+            far = far.max(c);
+        }
+        let eye_c = ((hi[0] - lo[0]) / (2.0 * tan_h)).min((hi[1] - lo[1]) / (2.0 * tan_v));
+        // NOTE: a box with no extent across the line of sight (a point) would put the eye on
+        // it; keep it a thousandth of the box's size (or a millimetre) in front.
+        let eye_c = eye_c.min(near - 1e-3 * diagonal.max(1.0));
+        let middle = 0.5 * (near + far);
+        let corners = bounds.corners();
+        let across = |axis: Vec3| {
+            let points = corners.map(|c| (c.dot(&axis), c.dot(&forward) - eye_c));
+            centre_across(&points)
         };
-        let spec = mesh.spec();
-        let size = spec.width.max(spec.height);
-        let b = b.including(Vec3::new(b.min.x, b.min.y - 0.5 * size, b.min.z));
-        let radius = 0.5 * (b.max - b.min).norm();
-        if !(radius.is_finite() && radius > 0.0) {
-            return course;
+        let target = right * across(right) + up * across(up) + forward * middle;
+        let distance = middle - eye_c;
+        if !(distance.is_finite() && distance > 0.0 && target.iter().all(|x| x.is_finite())) {
+            return *self;
         }
         Self {
-            target: 0.5 * (b.min + b.max),
-            yaw: 0.0,
-            pitch: 20f64.to_radians(),
-            distance: radius / (0.5 * course.vfov).sin(),
-            vfov: course.vfov,
+            target,
+            distance,
+            ..*self
         }
+    }
+
+    /// `(forward, right, up)` unit vectors of the camera, with the pitch clamped as
+    /// [`Orbit::eye`] clamps it.
+    fn basis(&self) -> (Vec3, Vec3, Vec3) {
+        let pitch = self.pitch.clamp(-Self::MAX_PITCH, Self::MAX_PITCH);
+        let forward = -Vec3::new(
+            pitch.cos() * self.yaw.sin(),
+            pitch.sin(),
+            pitch.cos() * self.yaw.cos(),
+        );
+        // NOTE: pitch is clamped below 90 degrees, so forward is never parallel to +y.
+        let right = forward.cross(&Vec3::y()).normalize();
+        let up = right.cross(&forward);
+        (forward, right, up)
     }
 
     /// Where the camera is, metres.
@@ -247,23 +305,72 @@ impl Orbit {
     }
 }
 
+/// Where along one axis across the line of sight an eye puts the picture of `points`, each
+/// `(across, depth from the eye)` with depths > 0, in the middle of the frame: the `e` at which
+/// the smallest and the largest `(across - e) / depth` are opposite.
+///
+/// NOTE: both are decreasing in `e`, so their sum is too, and it is >= 0 at the smallest
+/// `across` and <= 0 at the largest: bisection finds the root to rounding. From the eye the
+/// fit computed (inside the window on both sides), moving to the root shrinks the larger of
+/// the two and grows the other up to its size, so the picture stays inside the window.
+fn centre_across(points: &[(f64, f64)]) -> f64 {
+    let sum = |e: f64| {
+        let (lo, hi) = points
+            .iter()
+            .map(|&(a, d)| (a - e) / d)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+                (l.min(x), h.max(x))
+            });
+        lo + hi
+    };
+    let (mut lo, mut hi) = points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &(a, _)| {
+            (l.min(a), h.max(a))
+        });
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if sum(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 /// Everything that decides the camera for a frame: the view, what it is fitted to, the margin
-/// and, for [`View::Orbit`], the orbit.
+/// and, for [`View::Orbit`], the orbit and whether it is fitted.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ViewSpec {
     /// Which view.
     pub view: View,
-    /// What an orthographic view is fitted to (orbit ignores it).
+    /// What the view is fitted to (an orbit not fitted ignores it).
     pub extent: Extent,
     /// Empty border around a fitted view, as a fraction of the frame on each side (0 to 0.45;
-    /// default 0.04).
+    /// default 0.04). [`Renderer`](crate::Renderer) keeps a fitted orbit's border at least
+    /// [`ViewSpec::ORBIT_MARGIN_CELLS`] cells wide.
     pub margin: f64,
-    /// The perspective camera used by [`View::Orbit`].
+    /// The perspective camera used by [`View::Orbit`]: as it is, or its direction and field of
+    /// view when [`ViewSpec::fit_orbit`] is set.
     pub orbit: Orbit,
+    /// Fit the orbit's target and distance to the extent, keeping its yaw, pitch and field of
+    /// view ([`Orbit::fitted`]), the way the orthographic views fit theirs (default true).
+    /// Pass a fixed extent to keep the camera still while the cloth moves.
+    pub fit_orbit: bool,
 }
 
 impl ViewSpec {
-    /// `view`, auto-fitted with the default margin, with the course's default orbit for `mesh`.
+    /// Fewest cells of empty border a fitted orbit keeps on each side: a fraction of a cell is
+    /// no border on a terminal (the cloth's edge would share the frame's edge cells), and the
+    /// half cell more keeps a point on the box's far edge out of the last row or column.
+    pub const ORBIT_MARGIN_CELLS: f64 = 1.5;
+
+    /// `view`, auto-fitted with the default margin, with the course's default orbit for `mesh`,
+    /// fitted.
     #[must_use]
     pub fn new(view: View, mesh: &ClothMesh) -> Self {
         Self {
@@ -271,7 +378,43 @@ impl ViewSpec {
             extent: Extent::Auto,
             margin: 0.04,
             orbit: Orbit::course_default(mesh),
+            fit_orbit: true,
         }
+    }
+
+    /// The orbit this spec is drawn with into a frame of `columns` x `rows` cells, each
+    /// `cell_aspect` times taller than wide, as [`Renderer`](crate::Renderer) draws it:
+    /// [`ViewSpec::orbit`] itself, or when [`ViewSpec::fit_orbit`] is set, fitted to the
+    /// extent (`content` when it is [`Extent::Auto`]) with the margin raised to at least
+    /// [`ViewSpec::ORBIT_MARGIN_CELLS`] cells. A front end that lets the user move a fitted
+    /// camera starts from this.
+    #[must_use]
+    pub fn orbit_in(
+        &self,
+        content: &Bounds,
+        columns: usize,
+        rows: usize,
+        cell_aspect: f64,
+    ) -> Orbit {
+        if !self.fit_orbit {
+            return self.orbit;
+        }
+        let fit = match self.extent {
+            Extent::Auto => *content,
+            Extent::Fixed(b) => b,
+        };
+        self.orbit.fitted(
+            &fit,
+            columns as f64 / (rows as f64 * cell_aspect),
+            self.orbit_margin(columns, rows),
+        )
+    }
+
+    /// The margin of a fitted orbit in a `columns` x `rows` frame (see
+    /// [`ViewSpec::ORBIT_MARGIN_CELLS`]).
+    pub(crate) fn orbit_margin(&self, columns: usize, rows: usize) -> f64 {
+        let cells = columns.min(rows).max(1) as f64;
+        self.margin.max(Self::ORBIT_MARGIN_CELLS / cells).min(0.45)
     }
 }
 
@@ -314,7 +457,8 @@ pub struct Camera {
 impl Camera {
     /// The camera of `spec` for a `width` x `height` pixel grid whose pixels are `aspect` times
     /// taller than wide. `content` is what an auto-fitted view frames (ignored by a fixed extent
-    /// and by orbit).
+    /// and by an orbit not fitted). A fitted orbit gets `spec.margin` as it is; the
+    /// [`Renderer`](crate::Renderer) raises it to whole cells first ([`ViewSpec::orbit_in`]).
     ///
     /// # Errors
     /// [`RenderError::BadOption`] for a bad margin, aspect or orbit.
@@ -371,13 +515,19 @@ impl Camera {
                 aspect,
             })
         } else {
-            let o = &spec.orbit;
-            o.validate()?;
+            spec.orbit.validate()?;
+            let o = if spec.fit_orbit {
+                let fit = match spec.extent {
+                    Extent::Auto => *content,
+                    Extent::Fixed(b) => b,
+                };
+                spec.orbit
+                    .fitted(&fit, width as f64 / (height as f64 * aspect), spec.margin)
+            } else {
+                spec.orbit
+            };
             let eye = o.eye();
-            let forward = (o.target - eye).normalize();
-            // NOTE: pitch is clamped below 90 degrees, so forward is never parallel to +y.
-            let right = forward.cross(&Vec3::y()).normalize();
-            let up = right.cross(&forward);
+            let (forward, right, up) = o.basis();
             let focal = half_h * aspect / (o.vfov / 2.0).tan();
             Ok(Self {
                 origin: eye,
@@ -565,7 +715,10 @@ mod tests {
     #[test]
     fn course_default_orbit_looks_along_minus_z_at_the_cloth() {
         let mesh = ClothMesh::new(&GridSpec::default()).unwrap();
-        let s = spec(View::Orbit);
+        let s = ViewSpec {
+            fit_orbit: false,
+            ..spec(View::Orbit)
+        };
         // Horizontal 1 m cloth at y = 1: target (0.5, 0.5, 0.5), eye 1.8 m further along +z.
         assert!((s.orbit.target - Vec3::new(0.5, 0.5, 0.5)).norm() < 1e-12);
         assert!((s.orbit.eye() - Vec3::new(0.5, 0.5, 2.3)).norm() < 1e-12);
@@ -580,6 +733,103 @@ mod tests {
         assert!(cam.project(Vec3::new(0.5, 0.5, 3.0)).is_none());
         assert!(cam.depth_of(Vec3::new(0.5, 0.5, 0.0)) > cam.depth_of(Vec3::new(0.5, 0.5, 1.0)));
         let _ = mesh;
+    }
+
+    /// The pixel window a box's corners project into: `(min x, max x, min y, max y)`.
+    fn window(cam: &Camera, b: &Bounds) -> (f64, f64, f64, f64) {
+        let mut w = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
+        for c in b.corners() {
+            let p = cam.project(c).unwrap();
+            w = (w.0.min(p.x), w.1.max(p.x), w.2.min(p.y), w.3.max(p.y));
+        }
+        w
+    }
+
+    #[test]
+    fn a_fitted_orbit_frames_the_box_within_the_margin_and_fills_one_axis() {
+        // Boxes flat, tall, deep and off the origin, seen along the course's direction and from
+        // turned and raised cameras, in a wide and a tall frame of cells twice as tall as wide.
+        let boxes = [
+            unit_box(),
+            Bounds {
+                min: Vec3::new(-2.0, 0.0, 0.3),
+                max: Vec3::new(1.0, 0.05, 0.4),
+            },
+            Bounds {
+                min: Vec3::new(5.0, -3.0, -1.0),
+                max: Vec3::new(5.5, 1.0, 2.0),
+            },
+        ];
+        let margin = 0.1;
+        for b in boxes {
+            for (yaw, pitch) in [(0.0, 0.0), (0.7, 0.3), (-2.0, -1.2)] {
+                for (w, h) in [(60, 20), (20, 40)] {
+                    let mut s = spec(View::Orbit);
+                    s.margin = margin;
+                    s.extent = Extent::Fixed(b);
+                    s.orbit.yaw = yaw;
+                    s.orbit.pitch = pitch;
+                    let cam = Camera::new(&s, &unit_box(), w, h, 2.0).unwrap();
+                    let tag = format!("{b:?} yaw {yaw} pitch {pitch} {w}x{h}");
+                    // The direction is the orbit's, whatever the box.
+                    let dir = (s.orbit.target - s.orbit.eye()).normalize();
+                    assert!((cam.forward() - dir).norm() < 1e-12, "{tag}");
+                    let (x0, x1, y0, y1) = window(&cam, &b);
+                    let (mx, my) = (margin * w as f64, margin * h as f64);
+                    let eps = 1e-9;
+                    assert!(
+                        x0 >= mx - eps && x1 <= w as f64 - mx + eps,
+                        "{tag}: x {x0} {x1}"
+                    );
+                    assert!(
+                        y0 >= my - eps && y1 <= h as f64 - my + eps,
+                        "{tag}: y {y0} {y1}"
+                    );
+                    // The eye is as near as the margin allows: one axis meets it on both
+                    // sides, and the other is centred.
+                    let fills_x = (x0 - mx).abs() < 1e-6 && (x1 - (w as f64 - mx)).abs() < 1e-6;
+                    let fills_y = (y0 - my).abs() < 1e-6 && (y1 - (h as f64 - my)).abs() < 1e-6;
+                    assert!(fills_x || fills_y, "{tag}: {x0} {x1} {y0} {y1}");
+                    let centred = |a: f64, b: f64, n: usize| (a + b - n as f64).abs() < 1e-6;
+                    assert!(centred(x0, x1, w) && centred(y0, y1, h), "{tag}");
+                    // The orbit turns about the box's middle along the line of sight.
+                    let o = s.orbit_in(&unit_box(), w, h, 2.0);
+                    let mid = 0.5 * (b.min + b.max);
+                    assert!(((o.target - mid).dot(&dir)).abs() < 1e-9, "{tag}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_default_orbit_looks_along_the_course_direction_at_its_content() {
+        let mut s = spec(View::Orbit);
+        s.margin = 0.04;
+        let b = Bounds {
+            min: Vec3::new(0.0, -0.5, 0.0),
+            max: Vec3::new(1.0, 1.0, 1.0),
+        };
+        let cam = Camera::new(&s, &b, 80, 40, 2.0).unwrap();
+        assert!((cam.forward() + Vec3::z()).norm() < 1e-12);
+        let (x0, x1, y0, y1) = window(&cam, &b);
+        assert!(x0 > 0.0 && x1 < 80.0 && y0 > 0.0 && y1 < 40.0);
+        // Unfitted, the same spec draws the orbit as given.
+        s.fit_orbit = false;
+        assert_eq!(s.orbit_in(&b, 80, 40, 2.0), s.orbit);
+    }
+
+    #[test]
+    fn a_fitted_orbit_keeps_at_least_one_and_a_half_cells_of_border() {
+        let s = ViewSpec::new(View::Orbit, &ClothMesh::new(&GridSpec::default()).unwrap());
+        // 4 % of 20 rows is 0.8 rows: raised to 1.5 / 20; 4 % of 200 rows is kept.
+        assert!((s.orbit_margin(60, 20) - 0.075).abs() < 1e-12);
+        assert!((s.orbit_margin(400, 200) - 0.04).abs() < 1e-12);
+        assert!((s.orbit_margin(8, 2) - 0.45).abs() < 1e-12);
     }
 
     #[test]

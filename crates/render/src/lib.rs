@@ -22,7 +22,11 @@
 //! # Pipeline
 //!
 //! 1. Fit a [`Camera`] to the scene ([`View`], [`Extent`]) for the pixel grid of the
-//!    [`Mode`] (1 x 1, 1 x 2 or 2 x 4 pixels per cell), correcting the cell aspect.
+//!    [`Mode`] (1 x 1, 1 x 2 or 2 x 4 pixels per cell), correcting the cell aspect. An
+//!    orthographic view fills the frame with the extent; the orbit view keeps its direction
+//!    (the course's, along -z) and moves its aim and distance until the extent fills the frame
+//!    ([`Orbit::fitted`]), keeping at least [`ViewSpec::ORBIT_MARGIN_CELLS`] cells empty on
+//!    each side.
 //! 2. Shade each vertex with its area-weighted normal ([`cloth_mesh::vertex_normals`]):
 //!    ambient + Lambert key light + headlight, for the front and for the back face.
 //! 3. Rasterise the triangles into a depth buffer (integer edge functions, top-left rule) and

@@ -10,7 +10,7 @@ use crate::glyphs::{
 use crate::raster::{LineFill, Material, Target};
 use crate::{
     AsciiFrame, Bounds, Camera, Cell, Extent, Light, Mode, Projected, RenderError, RenderOptions,
-    Rgb, ViewSpec,
+    Rgb, View, ViewSpec,
 };
 
 /// Pins hidden by at most this fraction of the scene's diagonal still show: a pin lies on the
@@ -134,7 +134,17 @@ impl Renderer {
         let (sx, sy) = options.mode.pixels_per_cell();
         let (pw, ph) = (frame.width() * sx, frame.height() * sy);
         let aspect = options.cell_aspect * sx as f64 / sy as f64;
-        let camera = Camera::new(view, &content, pw, ph, aspect)?;
+        let orbit_spec;
+        let fitting = if view.view == View::Orbit && view.fit_orbit && view.margin.is_finite() {
+            orbit_spec = ViewSpec {
+                margin: view.orbit_margin(frame.width(), frame.height()),
+                ..*view
+            };
+            &orbit_spec
+        } else {
+            view
+        };
+        let camera = Camera::new(fitting, &content, pw, ph, aspect)?;
         let lighting = Lighting::new(options);
 
         // NOTE: clear + resize keeps the capacity, so after the first frame of a size nothing

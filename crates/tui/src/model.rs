@@ -221,10 +221,13 @@ pub struct App {
     pub focus: usize,
     /// The view of each pane slot.
     pub views: [View; 4],
-    /// The orbit camera (shared by orbit panes).
+    /// The orbit camera (shared by orbit panes): the last one drawn while it is fitted.
     pub orbit: Orbit,
-    /// The region every fixed view frames: grows to hold the cloth, so the picture does not
-    /// rescale every frame; a reset or a new scene starts it again.
+    /// Whether the orbit camera is fitted to `extent` (the course's direction, refitted as the
+    /// extent grows); turning or zooming makes it the user's, `0` fits it again.
+    pub orbit_fitted: bool,
+    /// The region every view frames (the orbit while fitted): grows to hold the cloth, so the
+    /// picture does not rescale every frame; a reset or a new scene starts it again.
     pub extent: Option<Bounds>,
     /// First line of the help overlay shown (when it does not fit).
     pub help_scroll: u16,
@@ -283,7 +286,7 @@ pub struct App {
 impl App {
     /// A new app on `sim`, running or paused.
     pub fn new(sim: Run, running: bool) -> Self {
-        let orbit = Orbit::framing(&sim.scene.mesh, &sim.scene.colliders);
+        let orbit = Orbit::course_default(&sim.scene.mesh);
         let saved = (sim.settings.clone(), sim.entry().name());
         let display = super::panes::Display::for_mesh(&sim.scene.mesh);
         Self {
@@ -308,6 +311,7 @@ impl App {
             focus: 0,
             views: START_VIEWS,
             orbit,
+            orbit_fitted: true,
             extent: None,
             help_scroll: 0,
             mode: Mode::default(),

@@ -94,8 +94,10 @@ impl Display {
 
 /// Renders every visible pane at its current size into `app.frames`.
 ///
-/// Fixed views frame a region that only grows (the union of the scene's bounds over the run),
-/// so the picture keeps its scale while the cloth falls; a reset starts it again.
+/// Every view frames a region that only grows (the union of the scene's bounds over the run),
+/// so the picture keeps its scale while the cloth falls; a reset starts it again. The fitted
+/// orbit camera is refitted to it for the pane it is drawn in, so it moves only when the
+/// region grows.
 pub fn prepare(app: &mut App, area: Rect) {
     let Some(regions) = layout::regions(app, area) else {
         return;
@@ -131,12 +133,14 @@ pub fn prepare(app: &mut App, area: Rect) {
         };
         let view = app.views[slot];
         let mut spec = ViewSpec::new(view, mesh);
-        spec.orbit = app.orbit;
-        if view != View::Orbit
-            && let Some(e) = app.extent
-        {
+        if let Some(e) = app.extent {
             spec.extent = Extent::Fixed(e);
+            if view == View::Orbit && app.orbit_fitted {
+                app.orbit = spec.orbit_in(&e, size.width, size.height, options.cell_aspect);
+            }
         }
+        spec.orbit = app.orbit;
+        spec.fit_orbit = false;
         let frame = app.frames[slot].get_or_insert_with(|| AsciiFrame::new(size));
         if frame.size() != size {
             frame.resize(size);
@@ -203,12 +207,14 @@ fn prepare_compare(app: &mut App, rects: &[Rect]) {
             None => (full, &sim.state),
         };
         let mut spec = ViewSpec::new(view, mesh);
-        spec.orbit = app.orbit;
-        if view != View::Orbit
-            && let Some(e) = *extent
-        {
+        if let Some(e) = *extent {
             spec.extent = Extent::Fixed(e);
+            if view == View::Orbit && app.orbit_fitted {
+                app.orbit = spec.orbit_in(&e, size.width, size.height, options.cell_aspect);
+            }
         }
+        spec.orbit = app.orbit;
+        spec.fit_orbit = false;
         let frame = slot.get_or_insert_with(|| AsciiFrame::new(size));
         if frame.size() != size {
             frame.resize(size);

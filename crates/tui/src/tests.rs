@@ -691,6 +691,31 @@ fn dragging_in_an_orbit_pane_turns_the_camera_and_the_wheel_zooms() {
 }
 
 #[test]
+fn zero_returns_the_orbit_camera_to_the_view_fitted_to_the_scene() {
+    let mut app = app_with("pinned4", true);
+    app.views[1] = cloth_render::View::Orbit;
+    screen(&mut app, 120, 40);
+    let fitted = app.orbit;
+    // Along the course's direction, aimed at the middle of the flat start (pinned4 has no
+    // objects), where the course aims at half its height.
+    assert_eq!((fitted.yaw, fitted.pitch), (0.0, 0.0));
+    let middle = cloth_mesh::Vec3::new(0.5, 1.0, 0.5);
+    assert!((fitted.target - middle).norm() < 1e-9, "{fitted:?}");
+    press(&mut app, KeyCode::Char('a'));
+    press(&mut app, KeyCode::Char('z'));
+    screen(&mut app, 120, 40);
+    let moved = app.orbit;
+    assert!(moved.yaw != 0.0 && moved.distance < fitted.distance);
+    // A redraw keeps the user's camera; 0 fits it again, exactly as before (the cloth is
+    // paused, so the region fitted is the same).
+    screen(&mut app, 120, 40);
+    assert_eq!(app.orbit, moved);
+    press(&mut app, KeyCode::Char('0'));
+    screen(&mut app, 120, 40);
+    assert_eq!(app.orbit, fitted);
+}
+
+#[test]
 fn the_picker_lists_and_opens_scene_files_of_the_working_folder() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(

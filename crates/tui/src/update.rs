@@ -132,8 +132,9 @@ pub fn update(app: &mut App, msg: Message) {
         Message::Orbit { yaw, pitch } => turn(app, yaw, pitch),
         Message::Zoom(f) => zoom(app, f),
         Message::ResetCamera => {
-            app.orbit = Orbit::framing(&app.sim.scene.mesh, &app.sim.scene.colliders);
-            app.say(Level::Info, "orbit camera reset");
+            app.orbit = Orbit::course_default(&app.sim.scene.mesh);
+            app.orbit_fitted = true;
+            app.say(Level::Info, "orbit camera fitted to the scene");
         }
         Message::OpenPicker => {
             if app.unsaved()
@@ -796,6 +797,7 @@ fn restore_all(app: &mut App) {
 }
 
 fn turn(app: &mut App, yaw: f64, pitch: f64) {
+    app.orbit_fitted = false;
     app.orbit.yaw = (app.orbit.yaw + yaw).rem_euclid(std::f64::consts::TAU);
     app.orbit.pitch = (app.orbit.pitch + pitch).clamp(-Orbit::MAX_PITCH, Orbit::MAX_PITCH);
     orbit_hint(app);
@@ -806,6 +808,7 @@ fn zoom(app: &mut App, factor: f64) {
         let s = app.sim.scene.mesh.spec();
         s.width.max(s.height)
     };
+    app.orbit_fitted = false;
     // NOTE: keep the eye outside the cloth's neighbourhood and the cloth on screen.
     app.orbit.distance = (app.orbit.distance * factor).clamp(0.3 * size, 30.0 * size);
     orbit_hint(app);
@@ -1180,7 +1183,8 @@ fn start_scene(app: &mut App, scene: cloth_scene::Scene) {
     });
     match result {
         Ok(sim) => {
-            app.orbit = Orbit::framing(&sim.scene.mesh, &sim.scene.colliders);
+            app.orbit = Orbit::course_default(&sim.scene.mesh);
+            app.orbit_fitted = true;
             app.saved = (sim.settings.clone(), sim.entry().name());
             app.undo.clear();
             app.display = super::panes::Display::for_mesh(&sim.scene.mesh);
