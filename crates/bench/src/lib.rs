@@ -99,7 +99,7 @@ pub fn time_frames(
     Ok(timed.swap_remove(0).result)
 }
 
-/// The outcome of `frame_seconds.len()` frames that took `seconds` in all.
+/// The outcome of `frame_seconds.len()` frames of `mesh` at `params`, in `seconds` in all.
 fn result(
     mesh: &ClothMesh,
     params: &StepParams,
@@ -163,33 +163,62 @@ pub fn time_interleaved_each(
 ) -> Result<Vec<InterleavedResult>, (usize, SolveError)> {
     let fallback = StepParams::default();
     let at = |i: usize| params.get(i).or(params.last()).unwrap_or(&fallback);
-    for (i, (solver, state)) in runs.iter_mut().enumerate() {
+    let seconds = time_in_turn(runs.len(), run, |i| {
+        let (solver, state) = &mut runs[i];
+        advance_frame(&mut **solver, mesh, colliders, at(i), state).map(|_| ())
+    })?;
+    Ok(in_turn_results(seconds, mesh, |i| *at(i)))
+}
+
+/// Times `run.frames` frames of each of `runs` runs in turn, after `run.warmup_frames` untimed
+/// frames of each: `frame(i)` advances run `i` by one frame, whatever steps it (a solver on its
+/// state, or an application's whole frame). Returns each run's frame times in seconds.
+///
+/// # Errors
+/// The index of the run and the first error of any of its frames.
+pub fn time_in_turn<E>(
+    runs: usize,
+    run: BenchRun,
+    mut frame: impl FnMut(usize) -> Result<(), E>,
+) -> Result<Vec<Vec<f64>>, (usize, E)> {
+    for i in 0..runs {
         for _ in 0..run.warmup_frames {
-            advance_frame(&mut **solver, mesh, colliders, at(i), state).map_err(|e| (i, e))?;
+            frame(i).map_err(|e| (i, e))?;
         }
     }
     let frames = run.frames as usize;
-    let mut frame_seconds = vec![Vec::with_capacity(frames); runs.len()];
+    let mut frame_seconds = vec![Vec::with_capacity(frames); runs];
     for _ in 0..frames {
-        for (i, (solver, state)) in runs.iter_mut().enumerate() {
+        for (i, seconds) in frame_seconds.iter_mut().enumerate() {
             let start = Instant::now();
-            advance_frame(&mut **solver, mesh, colliders, at(i), state).map_err(|e| (i, e))?;
-            frame_seconds[i].push(start.elapsed().as_secs_f64());
+            frame(i).map_err(|e| (i, e))?;
+            seconds.push(start.elapsed().as_secs_f64());
         }
     }
+    Ok(frame_seconds)
+}
+
+/// The results of frames timed by [`time_in_turn`] on `mesh`, run `i` at `params(i)`: each
+/// run's figures and its typical frame's ratio to the first run's in the same round.
+#[must_use]
+pub fn in_turn_results(
+    mut frame_seconds: Vec<Vec<f64>>,
+    mesh: &ClothMesh,
+    params: impl Fn(usize) -> StepParams,
+) -> Vec<InterleavedResult> {
     let first = frame_seconds.first().cloned().unwrap_or_default();
-    Ok(frame_seconds
+    frame_seconds
         .iter_mut()
         .enumerate()
         .map(|(i, seconds)| {
             let mut ratios: Vec<f64> = seconds.iter().zip(&first).map(|(t, t0)| t / t0).collect();
             let total = seconds.iter().sum();
             InterleavedResult {
-                result: result(mesh, at(i), total, seconds),
+                result: result(mesh, &params(i), total, seconds),
                 time_ratio_to_first: median(&mut ratios).unwrap_or(1.0),
             }
         })
-        .collect())
+        .collect()
 }
 
 /// The median of `values` (the mean of the middle two for an even count); `None` when empty.

@@ -9,9 +9,10 @@
 //!
 //! Each configuration is the course's `pinned4` cloth scaled to `--grid N` points per side at the
 //! standard spacing ([`cloth_bench::pinned_grid`]), with `pinned4`'s parameters as `--set`
-//! changes them, warmed up for `--warmup` frames (90, one simulated second, by default), then timed
-//! by [`cloth_bench::time_frames`], or with `--interleave` frame by frame in turn with the
-//! grid's other configurations by [`cloth_bench::time_interleaved_each`]. Any registered
+//! changes them, stepped as every command steps a scene (a `cloth_run::Run`: the solver's steps,
+//! the divergence guard and the frame's numbers), warmed up for `--warmup` frames (90, one
+//! simulated second, by default), then timed by [`cloth_bench::time_in_turn`], alone or with
+//! `--interleave` frame by frame in turn with the grid's other configurations. Any registered
 //! solver can be timed by name, each at its recommended steps per frame unless `--steps` sets
 //! them (for all, or for one solver by name); `--threads` and `--order` set the options of
 //! those names of the solvers that have them (Verlet's). With `--interleave` each row gives two
@@ -26,13 +27,12 @@ use std::fmt::Write as _;
 use crate::steal::CpuTimes;
 use anyhow::Context as _;
 use clap::ValueEnum;
-use cloth_bench::{BenchResult, BenchRun, pinned_grid, time_frames, time_interleaved_each};
-use cloth_mesh::{ClothMesh, ClothState};
-use cloth_solver::{Registry, Solver, SolverEntry, StepParams, max_stretch_ratio};
-use serde_json::{Map, Value};
-
-use cloth_run::guard::Guard;
+use cloth_bench::{BenchResult, BenchRun, in_turn_results, pinned_grid, time_in_turn};
+use cloth_mesh::ClothMesh;
 use cloth_run::memory::{self, Need};
+use cloth_run::{Fault, Run};
+use cloth_solver::{Registry, SolverEntry, StepParams, max_stretch_ratio};
+use serde_json::{Map, Value};
 
 /// `clothsim bench` options.
 #[derive(Debug, clap::Args)]
@@ -257,9 +257,20 @@ impl Config {
         Ok(out)
     }
 
-    /// The solver to time.
-    fn build(&self, mesh: &ClothMesh) -> anyhow::Result<Box<dyn Solver>> {
-        Ok(self.entry.build(mesh, &self.options)?)
+    /// A run of this configuration on `scene`'s cloth: the solver with its options and the
+    /// configuration's step parameters, stepped frame by frame as every command steps.
+    fn run(&self, scene: &cloth_scene::Scene) -> anyhow::Result<Run> {
+        let mut scene = scene.clone();
+        let options = self.options.as_object().cloned().unwrap_or_default();
+        scene.set_solver(self.entry.name(), options);
+        let mut run = Run::new(
+            scene,
+            Registry::new().with(self.entry),
+            Some(self.entry.name()),
+        )?;
+        run.set_recording(false);
+        run.settings.params = self.params;
+        Ok(run)
     }
 
     /// The threads it runs on, as the table shows them (1 for a solver without the option).
@@ -320,76 +331,76 @@ fn time_grid(args: &Args, configs: &[Config], n: usize) -> anyhow::Result<Vec<Ro
     }
     let mesh = pinned_grid(n).with_context(|| format!("--grid {n}"))?;
     check_memory(args, configs, &mesh, n)?;
-    let run = BenchRun {
+    let mut scene = cloth_scene::load("pinned4", &args.sets)?;
+    scene.origin = format!("the {n} x {n} cloth");
+    scene.mesh = std::sync::Arc::new(mesh);
+    let timing = BenchRun {
         warmup_frames: args.warmup,
         frames: args.frames,
     };
-    if !args.interleave {
-        // One configuration alive at a time: each solver's memory is freed before the next.
-        let mut rows = Vec::new();
-        for config in configs {
-            let mut solver = config.build(&mesh).with_context(|| config.describe(n))?;
-            let mut state = ClothState::new(&mesh);
-            let before = CpuTimes::now();
-            let params = &config.params;
-            let result = time_frames(solver.as_mut(), &mesh, &[], params, &mut state, run)
-                .with_context(|| config.describe(n))?;
-            held_together(solver.as_mut(), &mesh, params, &mut state, config, run)
-                .with_context(|| config.describe(n))?;
-            rows.push(Row {
-                n,
-                config: config.clone(),
-                result,
-                ratio: None,
-                mean_ratio: None,
-                stretch: max_stretch_ratio(&mesh, &state),
-                steal: steal_since(before),
-            });
+    // Without --interleave one configuration is alive at a time: each solver's memory is freed
+    // before the next is built.
+    let groups: Vec<&[Config]> = if args.interleave {
+        vec![configs]
+    } else {
+        configs.chunks(1).collect()
+    };
+    let mut rows = Vec::new();
+    for group in groups {
+        let mut runs = group
+            .iter()
+            .map(|c| c.run(&scene).with_context(|| c.describe(n)))
+            .collect::<anyhow::Result<Vec<Run>>>()?;
+        let before = CpuTimes::now();
+        let seconds = time_in_turn(runs.len(), timing, |i| runs[i].step_frame())
+            .map_err(|(i, fault)| diverged(&fault).context(group[i].describe(n)))?;
+        let steal = steal_since(before);
+        let timed = in_turn_results(seconds, &scene.mesh, |i| group[i].params);
+        let first_seconds = timed.first().map_or(0.0, |t| t.result.seconds);
+        for (run, config) in runs.iter_mut().zip(group) {
+            held_together(run).with_context(|| config.describe(n))?;
         }
-        return Ok(rows);
+        rows.extend(
+            runs.iter()
+                .zip(group)
+                .zip(timed)
+                .map(|((run, config), t)| Row {
+                    n,
+                    config: config.clone(),
+                    result: t.result,
+                    ratio: args.interleave.then_some(t.time_ratio_to_first),
+                    mean_ratio: args.interleave.then_some(t.result.seconds / first_seconds),
+                    stretch: max_stretch_ratio(&run.scene.mesh, &run.state),
+                    steal,
+                }),
+        );
     }
-    let mut solvers = configs
-        .iter()
-        .map(|c| c.build(&mesh).with_context(|| c.describe(n)))
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    let mut states: Vec<ClothState> = configs.iter().map(|_| ClothState::new(&mesh)).collect();
-    let mut runs: Vec<(&mut dyn Solver, &mut ClothState)> = solvers
-        .iter_mut()
-        .map(|s| &mut **s as &mut dyn Solver)
-        .zip(states.iter_mut())
-        .collect();
-    let before = CpuTimes::now();
-    let params: Vec<StepParams> = configs.iter().map(|c| c.params).collect();
-    let timed = time_interleaved_each(&mut runs, &mesh, &[], &params, run)
-        .map_err(|(i, e)| anyhow::Error::new(e).context(configs[i].describe(n)))?;
-    let steal = steal_since(before);
-    let first_seconds = timed.first().map_or(0.0, |t| t.result.seconds);
-    for ((solver, state), config) in solvers.iter_mut().zip(states.iter_mut()).zip(configs) {
-        held_together(solver.as_mut(), &mesh, &config.params, state, config, run)
-            .with_context(|| config.describe(n))?;
-    }
-    Ok(configs
-        .iter()
-        .zip(timed)
-        .zip(&states)
-        .map(|((config, t), state)| Row {
-            n,
-            config: config.clone(),
-            result: t.result,
-            ratio: Some(t.time_ratio_to_first),
-            mean_ratio: Some(t.result.seconds / first_seconds),
-            stretch: max_stretch_ratio(&mesh, state),
-            steal,
-        })
-        .collect())
+    Ok(rows)
 }
 
-/// Whether the timed cloth held together: the divergence guard of `simulate` and `render`
-/// watches one more window of frames after the timing (a run that ended non-finite, or whose
-/// speed and energy are still growing without bound, is no timing of a cloth).
+/// A run's fault while it was timed: its timing means nothing.
+fn diverged(fault: &Fault) -> anyhow::Error {
+    anyhow::anyhow!(
+        "the run diverged, so its timing means nothing: {}; {}",
+        fault.what,
+        fault.advice
+    )
+}
+
+/// Whether the timed cloth held together: the run's divergence guard watches one more window
+/// of frames after the timing (a run that ended non-finite, or whose speed and energy are
+/// still growing without bound, is no timing of a cloth).
 ///
 /// # Errors
 /// The divergence, with its advice.
+fn held_together(run: &mut Run) -> anyhow::Result<()> {
+    let frames = (cloth_run::guard::WINDOW * run.settings.params.frames_per_sec).ceil() as u64 + 1;
+    for _ in 0..frames {
+        run.step_frame().map_err(|f| diverged(&f))?;
+    }
+    Ok(())
+}
+
 /// Refuses grid `n` when a configuration would need more memory than `--max-memory` (or the
 /// memory available): without `--interleave` one configuration at a time, with it all at once.
 fn check_memory(args: &Args, configs: &[Config], mesh: &ClothMesh, n: usize) -> anyhow::Result<()> {
@@ -397,7 +408,7 @@ fn check_memory(args: &Args, configs: &[Config], mesh: &ClothMesh, n: usize) -> 
     let limit = (args.max_memory, "a smaller --grid");
     let needs = configs
         .iter()
-        .map(|c| (c, Need::new(&c.entry, &c.options, mesh, 1, 0)));
+        .map(|c| (c, Need::new(&c.entry, &c.options, mesh, 2, 0)));
     if args.interleave {
         // Every configuration at once, sharing the mesh, each with its own state.
         let mut all = Need {
@@ -407,42 +418,13 @@ fn check_memory(args: &Args, configs: &[Config], mesh: &ClothMesh, n: usize) -> 
         };
         for (_, need) in needs {
             all.solver = all.solver.saturating_add(need.solver);
-            all.cloth = all.cloth.saturating_add(memory::state_bytes(mesh));
+            all.cloth = all.cloth.saturating_add(2 * memory::state_bytes(mesh));
         }
         let who = format!("--interleave's {} configurations", configs.len());
         return memory::check(&origin, &who, mesh, all, limit);
     }
     for (config, need) in needs {
         memory::check(&origin, &memory::solver(&config.entry), mesh, need, limit)?;
-    }
-    Ok(())
-}
-
-fn held_together(
-    solver: &mut dyn Solver,
-    mesh: &ClothMesh,
-    params: &StepParams,
-    state: &mut ClothState,
-    config: &Config,
-    run: BenchRun,
-) -> anyhow::Result<()> {
-    let point_mass = mesh.point_mass(params.density);
-    let mut guard = Guard::new();
-    let frames = (cloth_run::guard::WINDOW * params.frames_per_sec).ceil() as u64 + 1;
-    for f in 0..=frames {
-        if f > 0 {
-            cloth_solver::advance_frame(solver, mesh, &[], params, state)?;
-        }
-        // Simulated time since the start: gravity's share of the speed grows with it.
-        let time = (u64::from(run.warmup_frames) + u64::from(run.frames) + f) as f64
-            / params.frames_per_sec;
-        if let Err(d) = guard.check_state(state, params, point_mass, time) {
-            anyhow::bail!(
-                "the run diverged, so its timing means nothing: {}; {}",
-                d.describe(),
-                d.advice(&config.entry, params, point_mass)
-            );
-        }
     }
     Ok(())
 }
