@@ -1422,3 +1422,35 @@ fn a_study_is_refused_when_its_variants_together_need_more_memory_than_allowed()
         "one variant fits"
     );
 }
+
+/// The sphere's cloth in free fall, 19 frames under Verlet: a switch to fast-implicit (one step
+/// per frame, thirty times Verlet's step) keeps its kinetic energy over the next frame within
+/// what gravity and the springs change in one frame (a few percent), where previous positions
+/// left one Verlet step behind would leave it a thirtieth of its speed.
+#[cfg(feature = "implicit")]
+#[test]
+fn a_solver_switch_in_the_ui_keeps_the_falling_cloths_kinetic_energy() {
+    let kinetic = |app: &App| {
+        cloth_solver::kinetic_energy(&app.sim.state, app.sim.point_mass(), app.sim.dt())
+    };
+    let mut reference = app_with("sphere", true);
+    for _ in 0..20 {
+        press(&mut reference, KeyCode::Char('n'));
+    }
+    let mut app = app_with("sphere", true);
+    for _ in 0..19 {
+        press(&mut app, KeyCode::Char('n'));
+    }
+    select(&mut app, "solver");
+    while app.sim.entry().name() != "fast-implicit" {
+        press(&mut app, KeyCode::Right);
+    }
+    press(&mut app, KeyCode::Char('n'));
+    assert_eq!((app.sim.frames, reference.sim.frames), (20, 20));
+    let (after, before) = (kinetic(&app), kinetic(&reference));
+    assert!(before > 50.0, "the cloth is falling: {before} J");
+    assert!(
+        (after / before - 1.0).abs() < 0.05,
+        "{after} J after the switch, {before} J under verlet"
+    );
+}
