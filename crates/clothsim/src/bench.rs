@@ -8,7 +8,7 @@
 //! machine, the figures of a run with much of it are not the code's).
 //!
 //! Each configuration is the course's `pinned4` cloth scaled to `--grid N` points per side at the
-//! standard spacing ([`cloth_bench::pinned_grid`]), with `pinned4`'s parameters as `--set`
+//! standard spacing ([`ClothMesh::pinned_grid`]), with `pinned4`'s parameters as `--set`
 //! changes them, warmed up for `--warmup` frames (90, one simulated second, by default), then timed
 //! by [`cloth_bench::time_frames`], or with `--interleave` frame by frame in turn with the
 //! grid's other configurations by [`cloth_bench::time_interleaved_each`]. Any registered
@@ -26,7 +26,7 @@ use std::fmt::Write as _;
 use crate::steal::CpuTimes;
 use anyhow::Context as _;
 use clap::ValueEnum;
-use cloth_bench::{BenchResult, BenchRun, pinned_grid, time_frames, time_interleaved_each};
+use cloth_bench::{BenchResult, BenchRun, time_frames, time_interleaved_each};
 use cloth_mesh::{ClothMesh, ClothState};
 use cloth_solver::{Registry, Solver, SolverEntry, StepParams, max_stretch_ratio};
 use serde_json::{Map, Value};
@@ -318,7 +318,7 @@ fn time_grid(args: &Args, configs: &[Config], n: usize) -> anyhow::Result<Vec<Ro
             max.isqrt()
         );
     }
-    let mesh = pinned_grid(n).with_context(|| format!("--grid {n}"))?;
+    let mesh = ClothMesh::pinned_grid(n).with_context(|| format!("--grid {n}"))?;
     check_memory(args, configs, &mesh, n)?;
     let run = BenchRun {
         warmup_frames: args.warmup,
