@@ -1,14 +1,14 @@
-//! Timing a solver frame by frame: the engine of `clothsim bench` and of the solvers' benches.
+//! Timing a solver frame by frame: the engine of `clothsim bench` and of the `frames` example.
 //!
 //! Criterion benches (`benches/`) are the measurement of record; this crate gives the binary a
 //! quick, dependency-free way to print ms per frame, particle-steps per second and the real-time
-//! factor for any solver behind the [`Solver`] trait, and gives benches and tests the course's
-//! cloth at any size ([`pinned_grid`]). Wall-clock time is read here, between frames, never
+//! factor for any solver behind the [`Solver`] trait, on any cloth (the course's at any size is
+//! [`ClothMesh::pinned_grid`]). Wall-clock time is read here, between frames, never
 //! inside a solver. It is a tool of the workspace, not part of any solver's API.
 
 use std::time::Instant;
 
-use cloth_mesh::{ClothMesh, ClothState, GridSpec, MeshError, Orientation};
+use cloth_mesh::{ClothMesh, ClothState};
 
 use cloth_solver::{Collider, SolveError, Solver, StepParams, advance_frame};
 
@@ -232,45 +232,9 @@ fn median(values: &mut [f64]) -> Option<f64> {
     }
 }
 
-/// The course's `pinned4` cloth scaled to `n x n` points at the standard cloth's spacing
-/// (1/49 m, so the cloth is `(n - 1) / 49` m wide) and thickness, pinned at its four corners.
-///
-/// Keeping the spacing (rather than squeezing `n` points into 1 m) keeps every point's
-/// neighbourhood, stretch and self-contact the same as in the standard scene, so the cost per
-/// point measured on a big grid is the cost per point of the course's cloth. `n = 50` is exactly
-/// `pinned4`.
-///
-/// # Errors
-/// [`MeshError`] when `n < 2` or `n * n` exceeds [`cloth_mesh::MAX_POINTS`].
-pub fn pinned_grid(n: usize) -> Result<ClothMesh, MeshError> {
-    let last = n.saturating_sub(1);
-    let size = last as f64 / 49.0;
-    ClothMesh::new(&GridSpec {
-        width: size,
-        height: size,
-        num_width_points: n,
-        num_height_points: n,
-        thickness: 0.0095,
-        orientation: Orientation::Horizontal,
-        pinned: vec![(0, 0), (last, 0), (0, last), (last, last)],
-        ..GridSpec::default()
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn pinned_grid_of_50_is_the_courses_pinned4() {
-        let mesh = pinned_grid(50).unwrap();
-        assert_eq!(mesh.spec().width, 1.0);
-        assert_eq!(mesh.springs().len(), 14_502);
-        assert_eq!(mesh.pinned().iter().filter(|&&p| p).count(), 4);
-        // The big cloth of the speed figures: 256 x 256 has 390,658 springs.
-        assert_eq!(pinned_grid(256).unwrap().springs().len(), 390_658);
-        assert!(pinned_grid(1).is_err());
-    }
 
     #[test]
     fn throughput_figures_follow_from_the_timing() {
@@ -296,7 +260,7 @@ mod tests {
         // Taking frames in turn must not change what each run computes: every state ends as a
         // run of its own with the same frames would leave it, bit for bit. The second run is a
         // different solver, so the runs really are independent.
-        let mesh = pinned_grid(10).unwrap();
+        let mesh = ClothMesh::pinned_grid(10).unwrap();
         let params = StepParams::default();
         let run = BenchRun {
             warmup_frames: 2,
@@ -333,7 +297,7 @@ mod tests {
     fn each_interleaved_run_takes_its_own_steps_per_frame() {
         // A run at 3 steps per frame advances exactly as one timed alone at 3 steps, beside a
         // run at 30; the results report each run's own steps.
-        let mesh = pinned_grid(8).unwrap();
+        let mesh = ClothMesh::pinned_grid(8).unwrap();
         let thirty = StepParams::default();
         let three = StepParams {
             steps_per_frame: 3,
@@ -366,7 +330,7 @@ mod tests {
 
     #[test]
     fn an_interleaved_run_that_fails_is_named_by_its_index() {
-        let mesh = pinned_grid(6).unwrap();
+        let mesh = ClothMesh::pinned_grid(6).unwrap();
         let params = StepParams::default();
         let mut good = cloth_solver::Verlet::new();
         let mut bad = cloth_solver::Verlet::new();

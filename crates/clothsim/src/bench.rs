@@ -8,7 +8,7 @@
 //! machine, the figures of a run with much of it are not the code's).
 //!
 //! Each configuration is the course's `pinned4` cloth scaled to `--grid N` points per side at the
-//! standard spacing ([`cloth_bench::pinned_grid`]), with `pinned4`'s parameters as `--set`
+//! standard spacing ([`ClothMesh::pinned_grid`]), with `pinned4`'s parameters as `--set`
 //! changes them, stepped as every command steps a scene (a `cloth_run::Run`: the solver's steps,
 //! the divergence guard and the frame's numbers), warmed up for `--warmup` frames (90, one
 //! simulated second, by default), then timed by [`cloth_bench::time_in_turn`], alone or with
@@ -27,7 +27,7 @@ use std::fmt::Write as _;
 use crate::steal::CpuTimes;
 use anyhow::Context as _;
 use clap::ValueEnum;
-use cloth_bench::{BenchResult, BenchRun, in_turn_results, pinned_grid, time_in_turn};
+use cloth_bench::{BenchResult, BenchRun, in_turn_results, time_in_turn};
 use cloth_mesh::ClothMesh;
 use cloth_run::memory::{self, Need};
 use cloth_run::{Fault, Run};
@@ -329,7 +329,7 @@ fn time_grid(args: &Args, configs: &[Config], n: usize) -> anyhow::Result<Vec<Ro
             max.isqrt()
         );
     }
-    let mesh = pinned_grid(n).with_context(|| format!("--grid {n}"))?;
+    let mesh = ClothMesh::pinned_grid(n).with_context(|| format!("--grid {n}"))?;
     check_memory(args, configs, &mesh, n)?;
     let mut scene = cloth_scene::load("pinned4", &args.sets)?;
     scene.origin = format!("the {n} x {n} cloth");

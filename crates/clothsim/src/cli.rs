@@ -22,7 +22,12 @@ use cloth_solver::{OptionKind, Registry};
 use crate::{bench, render, scenes, simulate};
 use cloth_run::solvers;
 use cloth_tui as app;
-/// A few typical command lines, printed at the end of the top-level help.
+/// The name the program is known by in its help, version, completions and man page, when no
+/// other is given: a plug-in binary (`clothsim-xpbd`) passes its own.
+pub const PROGRAM: &str = "clothsim";
+
+/// A few typical command lines, printed at the end of the top-level help, with [`PROGRAM`]
+/// standing for the running program's name.
 const EXAMPLES: &str = "\
 Examples:
   clothsim                                  the live UI on the bundled pinned4 scene
@@ -90,8 +95,9 @@ enum Command {
 }
 
 impl Cli {
-    /// Runs the chosen command with the solvers of `registry`.
-    pub fn run(self, registry: &Registry) -> anyhow::Result<()> {
+    /// Runs the chosen command with the solvers of `registry`; `program` is the name the
+    /// completions and manual pages are written for.
+    pub fn run(self, registry: &Registry, program: &str) -> anyhow::Result<()> {
         match self.command {
             Some(Command::Tui(args)) => app::run(&args.to_ui(), registry),
             Some(Command::Compare(args)) => app::run_compare(&args.to_ui(), registry),
@@ -100,10 +106,10 @@ impl Cli {
             Some(Command::Bench(args)) => bench::run(&args, registry),
             Some(Command::Scenes) => scenes::run(),
             Some(Command::Solvers) => print(solvers::listing(registry).as_bytes()),
-            Some(Command::Completions { shell }) => print(&completions(registry, shell)),
-            Some(Command::Man { dir: None }) => print(&man_page(registry)?),
+            Some(Command::Completions { shell }) => print(&completions(registry, program, shell)),
+            Some(Command::Man { dir: None }) => print(&man_page(registry, program)?),
             Some(Command::Man { dir: Some(dir) }) => {
-                clap_mangen::generate_to(command(registry), &dir)
+                clap_mangen::generate_to(command(registry, program), &dir)
                     .with_context(|| format!("{}: cannot write the manual pages", dir.display()))
             }
             None => app::run(&self.tui.to_ui(), registry),
@@ -111,10 +117,14 @@ impl Cli {
     }
 }
 
-/// The command line of an application with `registry`'s solvers: every `--solver` accepts
-/// exactly the registered names (listed with their descriptions in `--help`), the top-level
-/// help names them before its examples, and `--version` lists them.
-pub fn command(registry: &Registry) -> clap::Command {
+/// The command line of an application with `registry`'s solvers, run as `program`: every
+/// `--solver` accepts exactly the registered names (listed with their descriptions in
+/// `--help`), the top-level help names them before its examples, and `--version` lists them.
+///
+/// `program` names the command in usage lines, `--version`, the manual pages and every help
+/// text that shows a command line, so that a plug-in binary's help shows its own commands (its
+/// solvers are not the `clothsim` binary's).
+pub fn command(registry: &Registry, program: &str) -> clap::Command {
     let values: Vec<PossibleValue> = registry
         .entries()
         .iter()
@@ -139,23 +149,73 @@ pub fn command(registry: &Registry) -> clap::Command {
         .map(PossibleValue::new)
         .collect();
     // `--order` takes the `order` option's values of the registered solvers.
-    with_values(
+    let cmd = with_values(
         with_values(Cli::command(), "solver", &values),
         "order",
         &orders,
     )
     .after_help(format!(
-        "Solvers: {names} (their options: `clothsim solvers`).\n\n{EXAMPLES}"
+        "Solvers: {names} (their options: `{PROGRAM} solvers`).\n\n{EXAMPLES}"
     ))
-    .long_version(long_version(registry))
+    .long_version(long_version(registry));
+    named(cmd, program)
+        .name(program.to_owned())
+        .bin_name(program.to_owned())
 }
 
-/// Parses `args` (the program name first) against [`command`].
+/// `cmd` and its subcommands with every [`PROGRAM`] in their help texts (about, notes before
+/// and after, and their arguments' help) replaced by `program`.
+///
+/// The help is written once, in doc comments, with `clothsim` for the program; every mention
+/// is a command line or a file named after the command, so each becomes the running program.
+fn named(cmd: clap::Command, program: &str) -> clap::Command {
+    if program == PROGRAM {
+        return cmd;
+    }
+    let swap = |text: &clap::builder::StyledStr| text.to_string().replace(PROGRAM, program);
+    let mut cmd = cmd;
+    if let Some(text) = cmd.get_about().map(swap) {
+        cmd = cmd.about(text);
+    }
+    if let Some(text) = cmd.get_long_about().map(swap) {
+        cmd = cmd.long_about(text);
+    }
+    if let Some(text) = cmd.get_before_help().map(swap) {
+        cmd = cmd.before_help(text);
+    }
+    if let Some(text) = cmd.get_before_long_help().map(swap) {
+        cmd = cmd.before_long_help(text);
+    }
+    if let Some(text) = cmd.get_after_help().map(swap) {
+        cmd = cmd.after_help(text);
+    }
+    if let Some(text) = cmd.get_after_long_help().map(swap) {
+        cmd = cmd.after_long_help(text);
+    }
+    let ids: Vec<clap::Id> = cmd.get_arguments().map(|a| a.get_id().clone()).collect();
+    for id in ids {
+        cmd = cmd.mut_arg(id, |arg| {
+            let help = arg.get_help().map(swap);
+            let long_help = arg.get_long_help().map(swap);
+            let arg = match help {
+                Some(text) => arg.help(text),
+                None => arg,
+            };
+            match long_help {
+                Some(text) => arg.long_help(text),
+                None => arg,
+            }
+        });
+    }
+    cmd.mut_subcommands(|sub| named(sub, program))
+}
+
+/// Parses `args` (the program name first) against [`command`] for `program`.
 ///
 /// # Errors
 /// clap's error (also for `--help` and `--version`, which print and succeed).
-pub fn parse(registry: &Registry, args: Vec<OsString>) -> Result<Cli, clap::Error> {
-    let matches = command(registry).try_get_matches_from(args)?;
+pub fn parse(registry: &Registry, program: &str, args: Vec<OsString>) -> Result<Cli, clap::Error> {
+    let matches = command(registry, program).try_get_matches_from(args)?;
     Cli::from_arg_matches(&matches)
 }
 
@@ -185,26 +245,30 @@ fn print(bytes: &[u8]) -> anyhow::Result<()> {
     out.finish()
 }
 
-/// The manual page of `clothsim` (roff), its commands listed.
-fn man_page(registry: &Registry) -> anyhow::Result<Vec<u8>> {
+/// The manual page of `program` (roff), its commands listed.
+fn man_page(registry: &Registry, program: &str) -> anyhow::Result<Vec<u8>> {
     let mut page = Vec::new();
-    clap_mangen::Man::new(command(registry))
+    clap_mangen::Man::new(command(registry, program))
         .render(&mut page)
         .context("cannot render the manual page")?;
     Ok(page)
 }
 
-/// The completion script for `shell`.
+/// The completion script of `program` for `shell`: it completes `program`, so the scripts of
+/// clothsim and of a plug-in binary can be installed side by side.
 ///
 /// clap_complete writes the commands, options and the values of enumerated options. A scene
 /// argument takes a bundled name or a file, which a static script cannot know, so each shell
 /// that allows it gets the bundled names (fixed when the binary was built, as the scenes are)
 /// next to file names: bash through the words it offers at the scene's place, zsh through an
 /// alternative of names and `*.json` files, fish through extra rules (fish merges them).
-fn completions(registry: &Registry, shell: Shell) -> Vec<u8> {
-    let mut cmd = command(registry);
+fn completions(registry: &Registry, program: &str, shell: Shell) -> Vec<u8> {
+    let mut cmd = command(registry, program);
     let mut script = Vec::new();
-    clap_complete::generate(shell, &mut cmd, "clothsim", &mut script);
+    clap_complete::generate(shell, &mut cmd, program, &mut script);
+    // clap_complete's bash functions and case labels spell `-` as `__`; zsh's own function of
+    // scene names takes the same shape, so two programs' functions never share a name.
+    let label = program.replace('-', "__");
     let names: Vec<&str> = cloth_scene::BUNDLED.iter().map(|s| s.name).collect();
     let names = names.join(" ");
     let text = String::from_utf8_lossy(&script).into_owned();
@@ -212,17 +276,31 @@ fn completions(registry: &Registry, shell: Shell) -> Vec<u8> {
         // The bundled names join the word list of each command that takes a scene; the
         // `-o default` of the `complete` line falls back to file names when no word matches.
         Shell::Bash => {
-            let labels: Vec<String> = std::iter::once(("clothsim".to_owned(), &cmd))
+            let labels: Vec<String> = std::iter::once((label.clone(), &cmd))
                 .chain(
                     cmd.get_subcommands()
-                        .map(|c| (format!("clothsim__subcmd__{}", c.get_name()), c)),
+                        .map(|c| (format!("{label}__subcmd__{}", c.get_name()), c)),
                 )
                 .filter(|(_, c)| c.get_arguments().any(|a| a.get_id() == "scene"))
                 .map(|(label, _)| format!("{label})"))
                 .collect();
+            // NOTE: for a program with a `-` in its name, clap_complete spells the case arms of
+            // the subcommands (`a__subcmd__b__subcmd__render)`) otherwise than the states its
+            // loop sets (`a__b__subcmd__render`), so no arm would ever match and nothing after
+            // a command would complete; the arms are spelled here as the loop spells them.
+            let misspelled = format!("{}__subcmd__", program.replace('-', "__subcmd__"));
+            let spelled = format!("{label}__subcmd__");
             let mut out = String::with_capacity(text.len() + 512);
             let mut in_scene_command = false;
             for line in text.lines() {
+                let arm = line.trim_start();
+                let line = match arm.strip_prefix(misspelled.as_str()) {
+                    Some(rest) if arm.ends_with(')') && !arm.contains([' ', ',']) => {
+                        format!("{}{spelled}{rest}", &line[..line.len() - arm.len()])
+                    }
+                    _ => line.to_owned(),
+                };
+                let line = line.as_str();
                 let trimmed = line.trim();
                 if trimmed.ends_with(')') && !trimmed.contains(' ') {
                     in_scene_command = labels.iter().any(|l| l == trimmed);
@@ -248,7 +326,7 @@ fn completions(registry: &Registry, shell: Shell) -> Vec<u8> {
                 if line.contains(":scene -- ") && line.ends_with(":_files' \\") {
                     let cut = line.len() - ":_files' \\".len();
                     out.push_str(&line[..cut]);
-                    out.push_str(":_clothsim_scenes' \\");
+                    let _ = write!(out, ":_{label}_scenes' \\");
                 } else {
                     out.push_str(line);
                 }
@@ -256,7 +334,7 @@ fn completions(registry: &Registry, shell: Shell) -> Vec<u8> {
                 if i == 0 {
                     let _ = write!(
                         out,
-                        "\n_clothsim_scenes() {{\n    \
+                        "\n_{label}_scenes() {{\n    \
                          _alternative 'scenes:bundled scene:({names})' \\\n        \
                          'files:scene file:_files -g \"*.json\"'\n}}\n"
                     );
@@ -270,9 +348,9 @@ fn completions(registry: &Registry, shell: Shell) -> Vec<u8> {
             let _ = write!(
                 text,
                 "\n# Bundled scenes and scene files where a scene is expected.\n\
-                 complete -c clothsim -n \"__fish_use_subcommand\" -a \"{names}\"\n\
-                 complete -c clothsim -n \"{takes_scene}\" -a \"{names}\"\n\
-                 complete -c clothsim -n \"{takes_scene}\" -k -a \"(__fish_complete_suffix .json)\"\n"
+                 complete -c {program} -n \"__fish_use_subcommand\" -a \"{names}\"\n\
+                 complete -c {program} -n \"{takes_scene}\" -a \"{names}\"\n\
+                 complete -c {program} -n \"{takes_scene}\" -k -a \"(__fish_complete_suffix .json)\"\n"
             );
             text
         }
@@ -281,7 +359,8 @@ fn completions(registry: &Registry, shell: Shell) -> Vec<u8> {
     text.into_bytes()
 }
 
-/// `clothsim --version`: the version, the solvers of `registry` and the vector paths.
+/// `--version`'s text after the program's name: the version, the solvers of `registry` and the
+/// vector paths.
 fn long_version(registry: &Registry) -> String {
     let names: Vec<&str> = registry.names().collect();
     let missing = if cfg!(feature = "implicit") {
@@ -369,7 +448,7 @@ mod tests {
 
     #[test]
     fn the_command_line_is_consistent() {
-        command(&solvers::default_registry()).debug_assert();
+        command(&solvers::default_registry(), PROGRAM).debug_assert();
     }
 
     #[test]
@@ -444,7 +523,7 @@ mod tests {
 
     /// The long help of `clothsim COMMAND` (or the top level for `None`).
     fn long_help(command: Option<&str>) -> String {
-        let mut cmd = super::command(&solvers::default_registry());
+        let mut cmd = super::command(&solvers::default_registry(), PROGRAM);
         let cmd = match command {
             Some(name) => cmd.find_subcommand_mut(name).expect("a command"),
             None => &mut cmd,
@@ -534,8 +613,8 @@ mod tests {
             Shell::Elvish,
             Shell::PowerShell,
         ] {
-            let text =
-                String::from_utf8(completions(&solvers::default_registry(), shell)).expect("UTF-8");
+            let text = String::from_utf8(completions(&solvers::default_registry(), PROGRAM, shell))
+                .expect("UTF-8");
             for needle in ["simulate", "render", "frames", "mode"] {
                 assert!(text.contains(needle), "{shell}: {needle} missing");
             }
@@ -549,8 +628,8 @@ mod tests {
     #[test]
     fn bash_zsh_and_fish_complete_the_bundled_scene_names() {
         for shell in [Shell::Bash, Shell::Zsh, Shell::Fish] {
-            let text =
-                String::from_utf8(completions(&solvers::default_registry(), shell)).expect("UTF-8");
+            let text = String::from_utf8(completions(&solvers::default_registry(), PROGRAM, shell))
+                .expect("UTF-8");
             for scene in cloth_scene::BUNDLED {
                 assert!(
                     text.contains(scene.name),
@@ -559,8 +638,12 @@ mod tests {
                 );
             }
         }
-        let bash = String::from_utf8(completions(&solvers::default_registry(), Shell::Bash))
-            .expect("UTF-8");
+        let bash = String::from_utf8(completions(
+            &solvers::default_registry(),
+            PROGRAM,
+            Shell::Bash,
+        ))
+        .expect("UTF-8");
         let with_scenes = bash
             .lines()
             .filter(|l| l.trim().starts_with("opts=") && l.contains(" pinned4 "))
@@ -569,8 +652,12 @@ mod tests {
             with_scenes, 5,
             "top level, tui, compare, simulate and render:\n{bash}"
         );
-        let zsh = String::from_utf8(completions(&solvers::default_registry(), Shell::Zsh))
-            .expect("UTF-8");
+        let zsh = String::from_utf8(completions(
+            &solvers::default_registry(),
+            PROGRAM,
+            Shell::Zsh,
+        ))
+        .expect("UTF-8");
         assert!(zsh.contains("_files -g"), "zsh offers scene files too");
         assert_eq!(
             zsh.matches(":_clothsim_scenes'").count(),
@@ -579,10 +666,68 @@ mod tests {
         );
     }
 
+    /// Whether `text` names `clothsim` anywhere other than as part of `clothsim-xpbd`.
+    fn names_clothsim_alone(text: &str) -> bool {
+        text.replace("clothsim-xpbd", "").contains("clothsim")
+    }
+
+    #[test]
+    fn a_plug_in_binary_is_named_by_its_own_name_everywhere() {
+        let registry = solvers::default_registry();
+        let program = "clothsim-xpbd";
+        let mut cmd = command(&registry, program);
+        assert!(
+            cmd.render_version().starts_with("clothsim-xpbd 0."),
+            "{}",
+            cmd.render_version()
+        );
+        let help = cmd.render_long_help().to_string();
+        assert!(help.contains("clothsim-xpbd sphere --paused"), "{help}");
+        assert!(help.contains("`clothsim-xpbd scenes`"), "{help}");
+        assert!(!names_clothsim_alone(&help), "{help}");
+        for sub in ["simulate", "render", "bench", "completions", "man"] {
+            let page = cmd
+                .find_subcommand_mut(sub)
+                .map(|c| c.render_long_help().to_string())
+                .unwrap_or_default();
+            assert!(!names_clothsim_alone(&page), "{sub}:\n{page}");
+        }
+
+        let bash = String::from_utf8(completions(&registry, program, Shell::Bash)).expect("UTF-8");
+        assert!(
+            bash.contains(
+                "complete -F _clothsim__xpbd -o nosort -o bashdefault -o default clothsim-xpbd"
+            ),
+            "{bash}"
+        );
+        assert!(
+            !names_clothsim_alone(&bash.replace("clothsim__xpbd", "")),
+            "{bash}"
+        );
+        let with_scenes = bash
+            .lines()
+            .filter(|l| l.trim().starts_with("opts=") && l.contains(" pinned4 "))
+            .count();
+        assert_eq!(with_scenes, 5, "the scene names are still offered:\n{bash}");
+        let zsh = String::from_utf8(completions(&registry, program, Shell::Zsh)).expect("UTF-8");
+        assert!(zsh.starts_with("#compdef clothsim-xpbd"), "{zsh}");
+        assert_eq!(zsh.matches(":_clothsim__xpbd_scenes'").count(), 5, "{zsh}");
+        assert!(zsh.contains("\n_clothsim__xpbd_scenes() {"), "{zsh}");
+        let fish = String::from_utf8(completions(&registry, program, Shell::Fish)).expect("UTF-8");
+        assert!(fish.contains("complete -c clothsim-xpbd -n"), "{fish}");
+        assert!(!fish.contains("complete -c clothsim "), "{fish}");
+
+        let page =
+            String::from_utf8(man_page(&registry, program).expect("renders")).expect("UTF-8");
+        assert!(page.contains(".TH clothsim-xpbd 1"), "{page}");
+        assert!(page.contains("`clothsim\\-xpbd scenes`"), "{page}");
+    }
+
     #[test]
     fn the_man_page_is_roff_and_lists_the_commands() {
-        let page = String::from_utf8(man_page(&solvers::default_registry()).expect("renders"))
-            .expect("UTF-8");
+        let page =
+            String::from_utf8(man_page(&solvers::default_registry(), PROGRAM).expect("renders"))
+                .expect("UTF-8");
         assert!(
             page.starts_with(".ie") || page.contains(".TH clothsim 1"),
             "{page}"
@@ -593,7 +738,7 @@ mod tests {
     }
 
     fn help(args: &[&str]) -> String {
-        let mut cmd = command(&solvers::default_registry());
+        let mut cmd = command(&solvers::default_registry(), PROGRAM);
         let mut args = args.iter();
         let mut sub = &mut cmd;
         if let Some(first) = args.next() {
@@ -623,10 +768,10 @@ mod tests {
     fn a_solver_name_outside_the_registry_is_refused_by_the_parser() {
         let registry = solvers::default_registry();
         let args = ["clothsim", "simulate", "pinned4", "--solver", "rk4"].map(OsString::from);
-        let e = super::parse(&registry, args.to_vec()).unwrap_err();
+        let e = super::parse(&registry, PROGRAM, args.to_vec()).unwrap_err();
         assert_eq!(e.kind(), clap::error::ErrorKind::InvalidValue);
         assert!(e.to_string().contains("verlet"), "{e}");
         let args = ["clothsim", "simulate", "pinned4", "--solver", "VERLET"].map(OsString::from);
-        assert!(super::parse(&registry, args.to_vec()).is_ok());
+        assert!(super::parse(&registry, PROGRAM, args.to_vec()).is_ok());
     }
 }

@@ -42,26 +42,31 @@ pub fn run(registry: &Registry) -> ExitCode {
     run_from(registry, std::env::args_os())
 }
 
-/// Runs clothsim with the command line `args` (the program name first) and the solvers of
-/// `registry`; see [`run`].
+/// Runs clothsim with the command line `args` and the solvers of `registry`; see [`run`].
+///
+/// The first argument is the program: its file name without extension (`clothsim-xpbd` for
+/// `/usr/bin/clothsim-xpbd`) is the name the help, `--version`, the completion scripts and the
+/// manual pages use.
 pub fn run_from<I, T>(registry: &Registry, args: I) -> ExitCode
 where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    // The running binary's own name, so a plug-in binary's help, version, completions and
+    // manual pages name it rather than `clothsim`.
     let program = args
         .first()
         .and_then(|a| std::path::Path::new(a).file_stem())
         .map_or_else(
-            || "clothsim".to_owned(),
+            || cli::PROGRAM.to_owned(),
             |s| s.to_string_lossy().into_owned(),
         );
-    let cli = match cli::parse(registry, args) {
+    let cli = match cli::parse(registry, &program, args) {
         Ok(cli) => cli,
         Err(e) => return clap_exit(&program, &e),
     };
-    match cli.run(registry) {
+    match cli.run(registry, &program) {
         Ok(()) => ExitCode::SUCCESS,
         // A reader that stops early (`| head`) is a normal end.
         Err(e) if output::ended_by_reader(&e) => ExitCode::SUCCESS,

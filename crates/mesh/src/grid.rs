@@ -155,6 +155,32 @@ pub struct ClothMesh {
 }
 
 impl ClothMesh {
+    /// The course's `pinned4` cloth scaled to `n x n` points at the standard cloth's spacing
+    /// (1/49 m, so the cloth is `(n - 1) / 49` m wide) and thickness, horizontal, pinned at its
+    /// four corners: the cloth of benchmarks and of tests that need a cloth of any size.
+    ///
+    /// Keeping the spacing (rather than squeezing `n` points into 1 m) keeps every point's
+    /// neighbourhood, stretch and self-contact the same as in the standard scene, so the cost per
+    /// point measured on a big grid is the cost per point of the course's cloth. `n = 50` is
+    /// exactly `pinned4`.
+    ///
+    /// # Errors
+    /// A [`MeshError`] when `n < 2` or `n * n` exceeds [`MAX_POINTS`].
+    pub fn pinned_grid(n: usize) -> Result<Self, MeshError> {
+        let last = n.saturating_sub(1);
+        let size = last as f64 / 49.0;
+        Self::new(&GridSpec {
+            width: size,
+            height: size,
+            num_width_points: n,
+            num_height_points: n,
+            thickness: 0.0095,
+            orientation: Orientation::Horizontal,
+            pinned: vec![(0, 0), (last, 0), (0, last), (last, last)],
+            ..GridSpec::default()
+        })
+    }
+
     /// Builds the grid, springs and triangles described by `spec`.
     ///
     /// # Errors
@@ -353,6 +379,27 @@ mod tests {
 
     fn count(mesh: &ClothMesh, kind: SpringKind) -> usize {
         mesh.springs().iter().filter(|s| s.kind == kind).count()
+    }
+
+    #[test]
+    fn pinned_grid_of_50_is_the_courses_pinned4() {
+        let mesh = ClothMesh::pinned_grid(50).unwrap();
+        assert_eq!(mesh.spec().width, 1.0);
+        assert_eq!(mesh.springs().len(), 14_502);
+        assert_eq!(mesh.pinned().iter().filter(|&&p| p).count(), 4);
+        // The big cloth of the speed figures: 256 x 256 has 390,658 springs.
+        assert_eq!(
+            ClothMesh::pinned_grid(256).unwrap().springs().len(),
+            390_658
+        );
+        assert!(matches!(
+            ClothMesh::pinned_grid(1),
+            Err(MeshError::TooFewPoints { .. })
+        ));
+        assert!(matches!(
+            ClothMesh::pinned_grid(1 << 12),
+            Err(MeshError::TooManyPoints { .. })
+        ));
     }
 
     #[test]

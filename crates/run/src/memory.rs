@@ -209,7 +209,7 @@ mod tests {
 
     #[test]
     fn a_run_over_the_limit_is_refused_naming_the_estimate_and_the_limit() {
-        let mesh = cloth_bench::pinned_grid(100).unwrap();
+        let mesh = ClothMesh::pinned_grid(100).unwrap();
         let entry = Verlet::ENTRY;
         let need = Need::new(&entry, &Value::Null, &mesh, 1, 0);
         assert_eq!(
@@ -247,7 +247,7 @@ mod tests {
 
     #[test]
     fn the_cloths_bytes_are_its_arrays() {
-        let mesh = cloth_bench::pinned_grid(50).unwrap();
+        let mesh = ClothMesh::pinned_grid(50).unwrap();
         assert_eq!(state_bytes(&mesh), 2 * 2500 * 24);
         let springs = size_of_val(mesh.springs()) as u64;
         assert_eq!(mesh_bytes(&mesh), 2500 * 25 + springs + 2 * 49 * 49 * 12);

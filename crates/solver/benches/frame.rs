@@ -9,7 +9,6 @@
 use std::hint::black_box;
 use std::time::Duration;
 
-use cloth_bench::{BenchRun, pinned_grid, time_frames};
 use cloth_mesh::{ClothMesh, ClothState, GridSpec, Orientation, Vec3};
 use cloth_solver::{
     Collider, ConstraintOrder, Plane, Solver, SpatialHash, Sphere, StepParams, Verlet,
@@ -71,18 +70,9 @@ fn bench_frames(
     warmup_frames: u32,
 ) {
     let mut state = ClothState::new(mesh);
-    time_frames(
-        solver.as_mut(),
-        mesh,
-        colliders,
-        params,
-        &mut state,
-        BenchRun {
-            warmup_frames,
-            frames: 0,
-        },
-    )
-    .unwrap();
+    for _ in 0..warmup_frames {
+        advance_frame(solver.as_mut(), mesh, colliders, params, &mut state).unwrap();
+    }
     c.throughput(Throughput::Elements(
         mesh.len() as u64 * u64::from(params.steps_per_frame),
     ));
@@ -131,7 +121,7 @@ fn grids(c: &mut Criterion) {
     g.measurement_time(Duration::from_secs(5));
     let params = StepParams::default();
     for n in [64, 128, 256] {
-        let mesh = pinned_grid(n).unwrap();
+        let mesh = ClothMesh::pinned_grid(n).unwrap();
         bench_frames(
             &mut g,
             BenchmarkId::new("self-on", n),
@@ -162,7 +152,7 @@ fn self_collision(c: &mut Criterion) {
     g.sample_size(20);
     g.measurement_time(Duration::from_secs(4));
     for n in [64, 128, 256, 512] {
-        let mesh = pinned_grid(n).unwrap();
+        let mesh = ClothMesh::pinned_grid(n).unwrap();
         let h = 1.0 / 49.0;
         let mut rng = cloth_mesh::SplitMix64::new(n as u64);
         let template: Vec<Vec3> = mesh
@@ -206,7 +196,7 @@ fn threads(c: &mut Criterion) {
     g.sample_size(10);
     g.measurement_time(Duration::from_secs(5));
     let params = StepParams::default();
-    let mesh = pinned_grid(256).unwrap();
+    let mesh = ClothMesh::pinned_grid(256).unwrap();
     for order in [
         ConstraintOrder::Faithful,
         ConstraintOrder::Parallel,
@@ -246,7 +236,7 @@ impl BenchMarkName {
 fn divider(c: &mut Criterion) {
     let mut g = c.benchmark_group("divider");
     g.sample_size(20);
-    let springs = pinned_grid(256).unwrap().springs().len();
+    let springs = ClothMesh::pinned_grid(256).unwrap().springs().len();
     let len2: Vec<f64> = (0..springs)
         .map(|k| 4e-4 * (1.0 + (k % 97) as f64 * 1e-3))
         .collect();

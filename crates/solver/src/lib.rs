@@ -28,10 +28,6 @@ mod verlet_entry;
 #[cfg(test)]
 mod testing;
 
-/// The course's cloth at any size, for the unit tests of the fast paths.
-#[cfg(test)]
-pub(crate) use cloth_bench::pinned_grid;
-
 // NOTE: the world's data (colliders, parameters) lives in cloth-mesh, below every solver, so
 // scene files and renderers need no solver crate; it is re-exported here so that a solver
 // written against this crate finds everything it needs in one place.

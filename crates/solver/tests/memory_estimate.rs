@@ -7,8 +7,7 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicIsize, Ordering};
 
-use cloth_bench::pinned_grid;
-use cloth_mesh::{ClothState, Vec3};
+use cloth_mesh::{ClothMesh, ClothState, Vec3};
 use cloth_solver::{Collider, ConstraintOrder, Solver, Sphere, StepParams, Verlet, advance_frame};
 use serde_json::json;
 
@@ -51,7 +50,7 @@ static GLOBAL: Tracking = Tracking;
 /// an `n` x `n` cloth pinned at its corners, falling onto a sphere under it with
 /// self-collision and the stretch limit on: every pass of the step runs and every buffer grows.
 fn peak_bytes(solver: &mut dyn Solver, n: usize, frames: usize) -> u64 {
-    let mesh = pinned_grid(n).unwrap();
+    let mesh = ClothMesh::pinned_grid(n).unwrap();
     let side = (n - 1) as f64 / 49.0;
     let colliders = [Collider::Sphere(Sphere {
         origin: Vec3::new(side / 2.0, 0.7, side / 2.0),
@@ -83,7 +82,7 @@ fn the_estimate_covers_what_verlet_allocates_within_a_factor_of_two() {
         (2, ConstraintOrder::Colored),
     ] {
         for n in [40, 96] {
-            let mesh = pinned_grid(n).unwrap();
+            let mesh = ClothMesh::pinned_grid(n).unwrap();
             let estimate = Verlet::memory_estimate(&mesh, threads, order);
             // Built before the count starts: the thread pool is the process's, not the step's.
             let mut solver = Verlet::new()
@@ -100,7 +99,7 @@ fn the_estimate_covers_what_verlet_allocates_within_a_factor_of_two() {
         }
     }
     // The registry entry states the same figure for the same options.
-    let mesh = pinned_grid(64).unwrap();
+    let mesh = ClothMesh::pinned_grid(64).unwrap();
     assert_eq!(
         Verlet::ENTRY.memory_estimate(&mesh, &json!({"threads": 2, "order": "colored"})),
         Verlet::memory_estimate(&mesh, 2, ConstraintOrder::Colored)

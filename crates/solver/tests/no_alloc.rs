@@ -6,8 +6,7 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use cloth_bench::pinned_grid;
-use cloth_mesh::{ClothState, Vec3};
+use cloth_mesh::{ClothMesh, ClothState, Vec3};
 use cloth_solver::{Collider, ConstraintOrder, Solver, Sphere, StepParams, Verlet, advance_frame};
 
 struct Counting;
@@ -36,7 +35,7 @@ static GLOBAL: Counting = Counting;
 /// a 0.8 m cloth sags about 0.25 m at the 10 % stretch limit), with self-collision and the
 /// stretch limit on: every pass of the step runs.
 fn allocations_after_warmup(solver: &mut dyn Solver, warmup: usize, frames: usize) -> usize {
-    let mesh = pinned_grid(40).unwrap();
+    let mesh = ClothMesh::pinned_grid(40).unwrap();
     let colliders = [Collider::Sphere(Sphere {
         origin: Vec3::new(0.4, 0.7, 0.4),
         radius: 0.15,

@@ -5,7 +5,6 @@
 //! faithful pass in every order); these tests show they keep the model's constraint and settle
 //! where the course's order settles, and that thread counts never change results.
 
-use cloth_bench::pinned_grid;
 use cloth_mesh::{ClothMesh, ClothState};
 use cloth_solver::{ConstraintOrder, Solver, StepParams, Verlet, advance_frame, max_stretch_ratio};
 
@@ -47,7 +46,7 @@ fn thread_count_never_changes_results() {
     // order's bands do not depend on the thread count, and self-collision's boxes are
     // independent: the bits must match. 96 x 96 points, so the threaded passes really
     // split the cloth (they take about 4,096 points a task).
-    let mesh = pinned_grid(96).unwrap();
+    let mesh = ClothMesh::pinned_grid(96).unwrap();
     let frames = 20;
     for order in [
         ConstraintOrder::Faithful,
@@ -78,7 +77,7 @@ fn parallel_order_keeps_springs_within_the_limit_as_well_as_the_courses_order() 
     // swept after their neighbours) are away from the pins. So the parallel order's worst spring
     // must match the course's to within 1 % of a rest length, the scale on which the two
     // settled states differ (a fraction of a millimetre on 20 mm springs).
-    let mesh = pinned_grid(50).unwrap();
+    let mesh = ClothMesh::pinned_grid(50).unwrap();
     let (_, faithful) = settle(&mesh, Verlet::new(), SETTLE_FRAMES);
     let (_, banded) = settle(&mesh, parallel(), SETTLE_FRAMES);
     assert!(faithful > 1.0, "the cloth hangs stretched");
@@ -96,7 +95,7 @@ fn parallel_order_settles_within_a_tenth_of_the_thickness_of_the_faithful_cloth(
     // (0.95 mm, 5 % of the spacing) is invisible at any zoom and far below the 19 mm repulsion
     // distance, while a wrong constraint (a skipped band, a missed pair) moves the hanging
     // cloth by centimetres.
-    let mesh = pinned_grid(50).unwrap();
+    let mesh = ClothMesh::pinned_grid(50).unwrap();
     let (faithful, _) = settle(&mesh, Verlet::new(), SETTLE_FRAMES);
     let (banded, _) = settle(&mesh, parallel(), SETTLE_FRAMES);
     let d = max_distance(&faithful, &banded);
@@ -116,7 +115,7 @@ fn colored_order_keeps_springs_within_the_limit_nearly_as_well_as_the_courses_or
     // the scale on which the two orders share out a step's residual. A sweep that skips
     // springs is far outside it: leaving out one of the twelve classes puts the worst spring
     // at 1.32 x rest.
-    let mesh = pinned_grid(50).unwrap();
+    let mesh = ClothMesh::pinned_grid(50).unwrap();
     let (_, faithful) = settle(&mesh, Verlet::new(), SETTLE_FRAMES);
     let (_, classes) = settle(&mesh, colored(), SETTLE_FRAMES);
     assert!(faithful > 1.0, "the cloth hangs stretched");
@@ -134,7 +133,7 @@ fn colored_order_settles_within_a_quarter_of_the_thickness_of_the_faithful_cloth
     // the spacing) is below a character cell of any view and far below the 19 mm repulsion
     // distance, while a wrong constraint moves the hanging cloth by centimetres: leaving out
     // one of the twelve classes moves it by 13 mm.
-    let mesh = pinned_grid(50).unwrap();
+    let mesh = ClothMesh::pinned_grid(50).unwrap();
     let (faithful, _) = settle(&mesh, Verlet::new(), SETTLE_FRAMES);
     let (classes, _) = settle(&mesh, colored(), SETTLE_FRAMES);
     let d = max_distance(&faithful, &classes);
@@ -148,7 +147,7 @@ fn threads_report_a_non_finite_point_as_one_thread_does() {
     // so only the check of the last positions sees it; a NaN or an infinity elsewhere spreads
     // to the positions within a step. Wherever it is, both thread counts must name the same
     // first point.
-    let mesh = pinned_grid(96).unwrap();
+    let mesh = ClothMesh::pinned_grid(96).unwrap();
     let params = StepParams::default();
     let pin = mesh.pinned().iter().rposition(|&p| p).unwrap();
     let poisons: [(usize, bool, f64); 3] = [

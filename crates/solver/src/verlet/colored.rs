@@ -539,8 +539,8 @@ impl Points for View<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::MAX_STRETCH;
     use crate::testing::assert_same_bits;
-    use crate::{MAX_STRETCH, pinned_grid};
     use cloth_mesh::{ClothMesh, GridSpec, Orientation};
 
     /// An `nw x nh` cloth at the standard spacing with every seventh point pinned (so lanes
@@ -664,7 +664,7 @@ mod tests {
     #[test]
     fn the_springs_of_a_class_share_no_point() {
         // What the threads' disjoint writes and the order-free result rest on.
-        let mesh = pinned_grid(11).unwrap();
+        let mesh = ClothMesh::pinned_grid(11).unwrap();
         let nw = mesh.nw();
         let offsets = offsets(nw);
         let mut springs = 0;

@@ -373,13 +373,13 @@ mod tests {
     use crate::self_collision::dist2;
     use crate::stretch::StretchBands;
     use crate::testing::assert_same_bits;
-    use crate::{MAX_STRETCH, limit_stretch, pinned_grid};
+    use crate::{ClothMesh, MAX_STRETCH, limit_stretch};
 
     #[test]
     fn the_sweep_makes_the_courses_corrections_bit_for_bit() {
         // Points scattered by up to 40 % of the spacing: many springs over the limit, chains of
         // corrections through shared points, pinned corners, and ragged rows (37 wide).
-        let mesh = pinned_grid(37).unwrap();
+        let mesh = ClothMesh::pinned_grid(37).unwrap();
         let stencil = Stencil::new(&mesh).unwrap();
         let mut rng = cloth_mesh::SplitMix64::new(3);
         let h = 0.4 / 49.0;
@@ -412,7 +412,7 @@ mod tests {
     /// only when the cloth between their ends is too, so the cascade needs pulls this large to
     /// reach them.
     fn cascading_cloth(nw: usize, seed: u64) -> (cloth_mesh::ClothMesh, Vec<Vec3>) {
-        let mesh = pinned_grid(nw).unwrap();
+        let mesh = ClothMesh::pinned_grid(nw).unwrap();
         let origin = mesh.start_positions()[0];
         let far = 2.0 / (nw - 1) as f64;
         let mut rng = cloth_mesh::SplitMix64::new(seed);
@@ -571,7 +571,7 @@ mod tests {
             (21, 1..2),
             (21, 14..21),
         ] {
-            let mesh = pinned_grid(nw).unwrap();
+            let mesh = ClothMesh::pinned_grid(nw).unwrap();
             let stencil = Stencil::new(&mesh).unwrap();
             let mut rng = cloth_mesh::SplitMix64::new(nw as u64);
             let h = 0.06 / (nw - 1) as f64;
@@ -597,7 +597,7 @@ mod tests {
 
     #[test]
     fn exists_masks_count_the_meshs_springs() {
-        let mesh = pinned_grid(9).unwrap();
+        let mesh = ClothMesh::pinned_grid(9).unwrap();
         let total: u32 = (0..mesh.len())
             .map(|i| exists_mask(9, i % 9, i / 9).count_ones())
             .sum();

@@ -575,7 +575,6 @@ fn integrate_row(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pinned_grid;
     use crate::testing::assert_same_bits;
 
     /// Sweeps rows `rows` of a `nw` x `nh` cloth, its points and their last positions jittered
@@ -695,7 +694,7 @@ mod tests {
         };
         let mut reused = RowScratch::default();
         for (n, bending) in [(41, 1000.0), (29, 0.0), (29, 1000.0), (41, 1000.0)] {
-            let mesh = pinned_grid(n).unwrap();
+            let mesh = ClothMesh::pinned_grid(n).unwrap();
             let stencil = Stencil::new(&mesh).unwrap();
             let mut rng = cloth_mesh::SplitMix64::new(n as u64);
             let positions: Vec<Vec3> = mesh

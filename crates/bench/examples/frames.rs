@@ -1,9 +1,9 @@
 //! Times frames of the Verlet solver on one configuration, for profiling
-//! (`perf stat`, `perf record`): `cargo run --release -p cloth-solver --example frames --
+//! (`perf stat`, `perf record`): `cargo run --release -p cloth-bench --example frames --
 //! <grid points per side> <self-collision on|off> <frames> [threads] [faithful|parallel|colored] [warm-up frames]`.
 
-use cloth_bench::{BenchRun, pinned_grid, time_frames};
-use cloth_mesh::ClothState;
+use cloth_bench::{BenchRun, time_frames};
+use cloth_mesh::{ClothMesh, ClothState};
 use cloth_solver::{ConstraintOrder, StepParams, Verlet};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -22,7 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     };
     let warmup_frames: u32 = arg(5, "90").parse()?;
-    let mesh = pinned_grid(n)?;
+    let mesh = ClothMesh::pinned_grid(n)?;
     let params = StepParams {
         self_collision,
         ..StepParams::default()
