@@ -90,8 +90,8 @@ pub fn ended_by_reader(e: &anyhow::Error) -> bool {
 
 /// Buffered standard output that refuses to write into a closed one (see the module doc).
 ///
-/// Errors come back as [`io::Error`]s; turn them into the command's error with
-/// [`stdout_error`] (the `?` on [`Stdout::write_all_or_fail`] and [`Stdout::finish`] does it).
+/// Its [`Write`] methods give [`io::Error`]s; [`Stdout::write_all_or_fail`],
+/// [`Stdout::flush_or_fail`] and [`Stdout::finish`] give the command's error, one message.
 pub struct Stdout {
     out: io::BufWriter<io::StdoutLock<'static>>,
 }
@@ -112,7 +112,7 @@ impl Stdout {
     /// Writes `bytes`, as the command's error on failure.
     ///
     /// # Errors
-    /// [`StdoutError`] (see [`ended_by_reader`] for the normal end).
+    /// Naming standard output and the cause ([`ended_by_reader`] tells the normal end apart).
     pub fn write_all_or_fail(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         self.write_all(bytes).map_err(stdout_error)
     }
