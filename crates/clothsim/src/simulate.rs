@@ -132,9 +132,6 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             output::check_target(path)?;
         }
     }
-    if args.out.is_some() || args.stats.is_some() {
-        output::cleanup_on_signals()?;
-    }
     let mut scene = cloth_scene::load(&args.scene, &args.sets)?;
     headless::note_shadowing(&args.scene);
     let choice = solvers::prepare(
@@ -344,9 +341,6 @@ fn run_study(args: &Args, registry: &Registry, format: &Format) -> anyhow::Resul
     };
     for path in &outs {
         output::check_target(path)?;
-    }
-    if !outs.is_empty() {
-        output::cleanup_on_signals()?;
     }
     headless::note_shadowing(&args.scene);
     let mut starts = Vec::with_capacity(variants.len());

@@ -10,7 +10,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Par, Side, Spec};
 
-use crate::memory::{Allocation, check_available, try_filled};
+use crate::memory::{Allocation, try_filled};
 
 /// The outcome of [`Cholesky::analyse`]: the symbolic factor and the workspace it needs.
 pub(crate) struct Analysis<T> {
@@ -124,7 +124,6 @@ impl<T: Precision> Cholesky<T> {
         rhs_cols: usize,
     ) -> Result<Self, String> {
         let analysis = Self::analyse(&col_ptr, &row_idx, rhs_cols)?;
-        check_available(analysis.bytes(), "the Cholesky factor").map_err(|e| e.to_string())?;
         let l_values = try_filled(
             analysis.symbolic.len_val(),
             T::default(),

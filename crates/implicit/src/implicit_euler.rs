@@ -141,7 +141,7 @@ use cloth_solver::{Collider, SolveError, Solver, SpatialHash, StepParams, StepRe
 use crate::cholesky::{AnyCholesky, Cholesky};
 use crate::commit::{commit, hold_still, predict};
 use crate::contact::Contacts;
-use crate::memory::{Allocation, check_available, try_filled};
+use crate::memory::{Allocation, try_filled};
 use crate::spring_energy::{SpringLaw, limit_penalty, limiter_stiffness};
 use crate::topology::{NONE, Topology};
 
@@ -407,16 +407,6 @@ impl ImplicitEuler {
         self.lambda.clear();
         self.lambda_before.clear();
         let topo = Topology::new(mesh);
-        // Check the whole size before the block pattern, itself large, is built.
-        let (scalar_ptr, scalar_idx) = topo.scalar_pattern();
-        let scalar = Cholesky::<f64>::analyse(&scalar_ptr, &scalar_idx, 1).map_err(method_error)?;
-        drop((scalar_ptr, scalar_idx));
-        check_available(
-            Self::estimate(&topo, mesh, scalar.factor_len() as u64),
-            "the implicit solver's matrix and Cholesky factor",
-        )
-        .map_err(alloc_error)?;
-        drop(scalar);
         let (col_ptr, row_idx) = topo.block_pattern();
         let chol =
             AnyCholesky::new(col_ptr.clone(), row_idx.clone(), 1, single).map_err(method_error)?;

@@ -2,13 +2,79 @@
 //! when its solver's estimate ([`SolverEntry::memory_estimate`]), the cloth and its states and
 //! the frames it draws come to more than `--max-memory`, or by default than the memory the
 //! system has available. A refused run allocates nothing large, so it cannot abort.
+//!
+//! This check is what keeps the solvers' own allocations from outgrowing the machine: every
+//! solver states its needs through its registry entry, and the run is refused before any
+//! solver is built, so the solver crates do not probe the system themselves.
 
 use std::fmt::Display;
 
 use cloth_mesh::{ClothMesh, Vec3};
 use cloth_render::{Mode, Renderer};
-use cloth_solver::{SolverEntry, available_memory, human_bytes};
+use cloth_solver::SolverEntry;
 use serde_json::Value;
+
+/// The memory a new allocation of this process can have, bytes: Linux's `MemAvailable` (free
+/// memory plus the caches it can drop), or the address-space limit (`ulimit -v`) when that is
+/// lower. `None` where neither is known (other systems, or a `/proc` that cannot be read, and no
+/// limit); only the allocations themselves can fail there.
+#[must_use]
+pub fn available_memory() -> Option<u64> {
+    let system = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|text| mem_available(&text));
+    match (system, address_space_limit()) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
+}
+
+/// `MemAvailable` in `/proc/meminfo`'s text, bytes.
+fn mem_available(meminfo: &str) -> Option<u64> {
+    let line = meminfo.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line
+        .trim_start_matches("MemAvailable:")
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    kib.checked_mul(1024)
+}
+
+/// The soft limit on this process's address space, bytes, when there is one. It counts what
+/// is mapped already (the program, its libraries, thread stacks), so a run near it may still
+/// fail to allocate; the allocations themselves report that.
+#[cfg(unix)]
+fn address_space_limit() -> Option<u64> {
+    use nix::sys::resource::{RLIM_INFINITY, Resource, getrlimit};
+    match getrlimit(Resource::RLIMIT_AS) {
+        Ok((soft, _)) if soft != RLIM_INFINITY => Some(soft),
+        _ => None,
+    }
+}
+
+#[cfg(not(unix))]
+fn address_space_limit() -> Option<u64> {
+    None
+}
+
+/// `bytes` as a short size in binary units (`512 bytes`, `10.7 GiB`).
+#[must_use]
+pub fn human_bytes(bytes: u64) -> String {
+    const UNITS: [&str; 5] = ["bytes", "KiB", "MiB", "GiB", "TiB"];
+    let mut value = bytes as f64;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < UNITS.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{bytes} bytes")
+    } else {
+        format!("{value:.1} {}", UNITS[unit])
+    }
+}
 
 /// What `--max-memory` takes, for messages and help.
 const SIZE_FORM: &str = "a number of bytes with an optional K, M, G or T suffix (powers of \
@@ -187,6 +253,21 @@ pub fn check(
 mod tests {
     use super::*;
     use cloth_solver::Verlet;
+
+    #[test]
+    fn mem_available_is_read_in_bytes_from_meminfo() {
+        let text = "MemTotal:       16318852 kB\nMemFree:  1 kB\nMemAvailable:    8159426 kB\n";
+        assert_eq!(mem_available(text), Some(8_159_426 * 1024));
+        assert_eq!(mem_available("MemTotal: 5 kB\n"), None);
+        assert_eq!(mem_available("MemAvailable: lots kB\n"), None);
+    }
+
+    #[test]
+    fn sizes_read_as_binary_units() {
+        assert_eq!(human_bytes(512), "512 bytes");
+        assert_eq!(human_bytes(1024 * 1024), "1.0 MiB");
+        assert_eq!(human_bytes(11_488_248_432), "10.7 GiB");
+    }
 
     #[test]
     fn sizes_take_binary_suffixes_and_refuse_anything_else() {

@@ -10,5 +10,5 @@
 mod atomic;
 mod stdout;
 
-pub use atomic::{StreamFile, check_target, cleanup_on_signals, write_atomic};
+pub use atomic::{StreamFile, Written, check_target, write_atomic};
 pub use stdout::{Stdout, ended_by_reader};

@@ -15,6 +15,7 @@ use serde_json::Value;
 
 use crate::export::StatsRow;
 use crate::guard::{Divergence, Guard};
+use crate::memory;
 use crate::solvers::{self, Choice};
 use cloth_solver::Collider;
 
@@ -241,9 +242,18 @@ impl Run {
     /// solver's (not edited, see [`Self::steps_follow_solver`]) become the new solver's.
     ///
     /// # Errors
-    /// When `name` is not registered or the solver cannot be built; the current solver stays.
+    /// When `name` is not registered, its estimate exceeds the memory available (the solvers
+    /// do not check that themselves), or the solver cannot be built; the current solver stays.
     pub fn set_solver(&mut self, name: &str) -> anyhow::Result<()> {
         let choice = solvers::choose(&self.registry, &self.scene, Some(name))?;
+        let need = memory::Need::new(&choice.entry, &choice.options, &self.scene.mesh, 0, 0);
+        memory::check(
+            &self.scene.origin,
+            &memory::solver(&choice.entry),
+            &self.scene.mesh,
+            need,
+            (None, memory::SMALLER_SCENE),
+        )?;
         let built = choice.build(&self.scene.mesh)?;
         if self.solver.is_some() {
             self.solver = Some(built);

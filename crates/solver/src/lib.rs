@@ -16,7 +16,6 @@
 mod diagnostics;
 mod disjoint;
 mod error;
-mod memory;
 mod reference;
 mod registry;
 mod self_collision;
@@ -37,7 +36,6 @@ pub use cloth_mesh::{
 };
 pub use diagnostics::{kinetic_energy, max_stretch_ratio};
 pub use error::SolveError;
-pub use memory::{available_memory, human_bytes};
 pub use reference::reference_step;
 pub use registry::{
     BuildSolver, EstimateMemory, OptionError, OptionKind, Registry, SolverEntry, SolverOption,

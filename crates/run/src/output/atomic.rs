@@ -1,43 +1,43 @@
 //! Writing result files atomically, without changing what kind of file they are.
 //!
-//! The bytes go to a temporary file next to the result, `.NAME.clothsim-tmp.PID`, which is
-//! flushed to disk and renamed over the result, so a crash, a kill or a full disk never leaves a
-//! half-written file where a good one was. Around that:
+//! The bytes go to a temporary file in the result's folder, which is flushed to disk and renamed
+//! over the result ([`atomic_write_file`]), so a crash, a kill or a full disk never leaves a
+//! half-written file where a good one was. On Linux the temporary file has no name until it is
+//! complete (`O_TMPFILE`), so an interrupted write leaves nothing behind to clean up; elsewhere,
+//! or on a file system without unnamed files, a kill mid-write can leave a `.NAME.XXXXXX` file
+//! beside the result. Around that:
 //!
 //! - A symlink is followed and its target written (the link stays a link).
-//! - An existing file keeps its permission bits and, where the system allows it, its owner and
-//!   group; a new file gets the mode a plain create gives (0666 less the umask).
-//! - A file with several names (hard links) is written in place, so every name sees the new
-//!   contents; replacing it would split the names apart, leaving the others on the old state.
+//! - An existing file keeps its permission bits and owner; a new file gets the mode a plain
+//!   create gives (0666 less the umask).
+//! - A file with several names (hard links) is replaced like any other: the name written gets
+//!   the new contents and the other names keep the old ones, which [`Written::note`] says.
+//!   Writing it in place instead would let a full disk or a kill destroy the contents every
+//!   name shares.
 //! - When the folder does not let us create the temporary file (a read-only folder holding a
-//!   writable file) or the file's owner cannot be kept, the file is written in place.
-//! - Writing in place is not atomic, so [`Written::note`] says when it happened.
-//! - A temporary file is removed when SIGINT, SIGTERM or SIGHUP arrives mid-write (once
-//!   [`cleanup_on_signals`] was called), and one left by a process that died otherwise (SIGKILL,
-//!   a power cut) is removed by the next write into the same folder.
+//!   writable file) or the file's owner cannot be kept, the file is written in place, which is
+//!   not atomic, and [`Written::note`] says so. The bytes past the old end are written first, so
+//!   a full disk is found while the old contents are still whole.
 //! - FIFOs and devices are opened and written as they are.
 
-use std::fs::{self, File, OpenOptions};
-use std::io::Write;
+use std::fs::{self, OpenOptions};
+use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 
 use anyhow::{Context, bail};
-
-/// The middle of every temporary file's name, so a leftover is recognisable.
-const TMP_MARK: &str = ".clothsim-tmp.";
+use atomic_write_file::AtomicWriteFile;
 
 /// How many symlinks are followed before giving up (Linux's own limit).
 const MAX_SYMLINKS: usize = 40;
-
-/// Temporary files being written, removed by the signal thread if a signal ends the process.
-static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
 /// How a file was written.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Written {
     /// Atomically: a temporary file renamed over the result.
     Replaced,
+    /// Atomically, over a file with other names (hard links), which keep the old contents; the
+    /// text says so.
+    Unlinked(String),
     /// In place, not atomically, for the reason given.
     InPlace(String),
     /// A FIFO or a device, opened and written as it is.
@@ -48,123 +48,32 @@ impl Written {
     /// What a user should be told about the write, if anything.
     pub fn note(&self) -> Option<&str> {
         match self {
-            Written::InPlace(why) => Some(why),
+            Written::InPlace(why) | Written::Unlinked(why) => Some(why),
             Written::Replaced | Written::Special => None,
         }
     }
-}
 
-/// Removes temporary files when SIGINT, SIGTERM or SIGHUP ends the process mid-write.
-///
-/// For the headless commands, whose only response to these signals is to end: a thread waits
-/// for them, removes every temporary file in flight, then ends the process as the signal's
-/// default action would (the exit status still tells the shell which signal it was). The UI has
-/// its own signal handling and its saves finish before it acts on a signal, so it does not call
-/// this.
-///
-/// # Errors
-/// When the signal handlers cannot be installed.
-pub fn cleanup_on_signals() -> anyhow::Result<()> {
-    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
-    static INSTALLED: std::sync::Once = std::sync::Once::new();
-    let mut result = Ok(());
-    INSTALLED.call_once(|| {
-        let mut signals = match signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) {
-            Ok(s) => s,
-            Err(e) => {
-                result = Err(anyhow::Error::new(e).context("cannot install signal handlers"));
-                return;
-            }
-        };
-        std::thread::spawn(move || {
-            if let Some(signal) = signals.forever().next() {
-                let paths = IN_FLIGHT
-                    .lock()
-                    .map_or_else(|poisoned| poisoned.into_inner().clone(), |p| p.clone());
-                for p in paths {
-                    let _ = fs::remove_file(p);
-                }
-                let _ = signal_hook::low_level::emulate_default_handler(signal);
-                // Only reached for a signal whose default is to carry on (none of ours).
-                std::process::exit(128 + signal);
-            }
-        });
-    });
-    result
-}
-
-/// A temporary file registered for removal; removed on drop unless it was renamed.
-struct TempFile {
-    path: PathBuf,
-    file: Option<File>,
-    renamed: bool,
-}
-
-impl TempFile {
-    /// Creates `.NAME.clothsim-tmp.PID` next to `target`, owner-only (`mode` 0600) or with the
-    /// mode a new file gets (`0666` less the umask).
-    fn create(dir: &Path, name: &str, mode: u32) -> std::io::Result<Self> {
-        let pid = std::process::id();
-        let mut attempt = 0u32;
-        loop {
-            let file_name = if attempt == 0 {
-                format!(".{name}{TMP_MARK}{pid}")
-            } else {
-                // Another write of the same file by this process is in flight.
-                format!(".{name}{TMP_MARK}{pid}.{attempt}")
-            };
-            let path = dir.join(file_name);
-            register(&path);
-            let mut options = OpenOptions::new();
-            options.write(true).create_new(true);
-            #[cfg(unix)]
-            {
-                use std::os::unix::fs::OpenOptionsExt;
-                options.mode(mode);
-            }
-            #[cfg(not(unix))]
-            let _ = mode;
-            match options.open(&path) {
-                Ok(file) => {
-                    return Ok(Self {
-                        path,
-                        file: Some(file),
-                        renamed: false,
-                    });
-                }
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempt < 100 => {
-                    unregister(&path);
-                    attempt += 1;
-                }
-                Err(e) => {
-                    unregister(&path);
-                    return Err(e);
-                }
-            }
+    /// [`Written::Replaced`], or [`Written::Unlinked`] when `existing` had other names.
+    fn replaced(path: &Path, existing: Option<&fs::Metadata>) -> Self {
+        match existing.map(link_count) {
+            Some(n) if n > 1 => Written::Unlinked(format!(
+                "{} had {n} names (hard links); it was replaced whole, so the other names still \
+                 show the old contents",
+                path.display()
+            )),
+            _ => Written::Replaced,
         }
     }
 }
 
-impl Drop for TempFile {
-    fn drop(&mut self) {
-        drop(self.file.take());
-        if !self.renamed {
-            let _ = fs::remove_file(&self.path);
-        }
-        unregister(&self.path);
-    }
+#[cfg(unix)]
+fn link_count(m: &fs::Metadata) -> u64 {
+    std::os::unix::fs::MetadataExt::nlink(m)
 }
 
-fn register(path: &Path) {
-    if let Ok(mut v) = IN_FLIGHT.lock() {
-        v.push(path.to_owned());
-    }
-}
-
-fn unregister(path: &Path) {
-    if let Ok(mut v) = IN_FLIGHT.lock() {
-        v.retain(|p| p != path);
-    }
+#[cfg(not(unix))]
+fn link_count(_: &fs::Metadata) -> u64 {
+    1
 }
 
 /// The file a write to `path` reaches: `path` with every symlink on it followed (a dangling
@@ -226,6 +135,57 @@ fn parent_of(path: &Path) -> &Path {
     }
 }
 
+/// The resolved target of a write to `path` and its metadata, `None` for a new file.
+fn target_of(path: &Path) -> anyhow::Result<(PathBuf, Option<fs::Metadata>)> {
+    check_target(path)?;
+    let target = resolve(path)?;
+    match fs::metadata(&target) {
+        Ok(m) => Ok((target, Some(m))),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok((target, None)),
+        Err(e) => Err(anyhow::Error::new(e).context(format!("{}: cannot write", path.display()))),
+    }
+}
+
+/// A temporary file that becomes `target` on commit, keeping an existing file's mode and
+/// owner: an error when the owner cannot be kept (only the superuser may give a file away).
+fn open_temporary(target: &Path, keep_owner: bool) -> std::io::Result<AtomicWriteFile> {
+    let mut options = AtomicWriteFile::options();
+    // Read back when the bytes must go in place after all (see `StreamFile::finish`).
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use atomic_write_file::unix::OpenOptionsExt;
+        options.preserve_mode(true).preserve_owner(keep_owner);
+    }
+    #[cfg(not(unix))]
+    let _ = keep_owner;
+    options.open(target)
+}
+
+/// What to do instead when no temporary file that keeps the owner can be made for an existing
+/// file: the note for a write in place, or `None` when the cause is not one a write in place
+/// gets around.
+fn in_place_instead(path: &Path, target: &Path, e: &std::io::Error) -> Option<String> {
+    use std::io::ErrorKind::{PermissionDenied, ReadOnlyFilesystem};
+    if !matches!(e.kind(), PermissionDenied | ReadOnlyFilesystem) {
+        return None;
+    }
+    // Without the owner, a temporary file can be made: the owner was the obstacle.
+    Some(if open_temporary(target, false).is_ok() {
+        format!(
+            "{} belongs to another user or group that a new file cannot be given, so it was \
+             written in place, not atomically, to keep its owner",
+            path.display()
+        )
+    } else {
+        format!(
+            "{} does not allow new files ({e}), so {} was written in place, not atomically",
+            parent_of(target).display(),
+            path.display()
+        )
+    })
+}
+
 /// Writes `bytes` to `path` atomically where it can, keeping what kind of file `path` is (see
 /// the module doc); [`Written`] says how it went.
 ///
@@ -233,53 +193,26 @@ fn parent_of(path: &Path) -> &Path {
 /// Naming `path` and the cause, once: a folder given as the file, a missing folder, no
 /// permission, a full disk.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<Written> {
-    let target = resolve(path)?;
-    let existing = match fs::metadata(&target) {
-        Ok(m) => Some(m),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-        Err(e) => {
-            return Err(anyhow::Error::new(e).context(format!("{}: cannot write", path.display())));
-        }
-    };
-    if let Some(m) = &existing {
-        if m.is_dir() {
-            check_target(path)?;
-        }
-        if !m.is_file() {
-            write_in_place(path, &target, bytes)?;
-            return Ok(Written::Special);
-        }
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::MetadataExt;
-            if m.nlink() > 1 {
-                write_in_place(path, &target, bytes)?;
-                return Ok(Written::InPlace(format!(
-                    "{} has {} names (hard links), so it was written in place, not atomically, \
-                     for every name to show the new contents",
-                    path.display(),
-                    m.nlink()
-                )));
-            }
-        }
+    let (target, existing) = target_of(path)?;
+    if existing.as_ref().is_some_and(|m| !m.is_file()) {
+        write_in_place(path, &target, bytes)?;
+        return Ok(Written::Special);
     }
-    let dir = parent_of(&target);
-    let Some(name) = target.file_name().map(|n| n.to_string_lossy().into_owned()) else {
-        bail!("{}: not a file name", path.display());
-    };
-    remove_leftovers(dir);
-    // An existing file's contents may be private: the temporary file is owner-only until it
-    // gets the old file's mode. A new file gets the mode a plain create gives.
-    let mode = if existing.is_some() { 0o600 } else { 0o666 };
-    let mut tmp = match TempFile::create(dir, &name, mode) {
-        Ok(t) => t,
-        Err(e)
-            if existing.is_some()
-                && matches!(
-                    e.kind(),
-                    std::io::ErrorKind::PermissionDenied | std::io::ErrorKind::ReadOnlyFilesystem
-                ) =>
-        {
+    let mut file = match open_temporary(&target, true) {
+        Ok(f) => f,
+        Err(e) => {
+            let dir = parent_of(&target);
+            let why = existing
+                .is_some()
+                .then(|| in_place_instead(path, &target, &e))
+                .flatten();
+            let Some(why) = why else {
+                return Err(anyhow::Error::new(e).context(format!(
+                    "{}: cannot create a file in {}",
+                    path.display(),
+                    dir.display()
+                )));
+            };
             write_in_place(path, &target, bytes).with_context(|| {
                 format!(
                     "{}: cannot create a temporary file in {} ({e}) and cannot write the file \
@@ -288,81 +221,42 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<Written> {
                     dir.display()
                 )
             })?;
-            return Ok(Written::InPlace(format!(
-                "{} does not allow new files ({e}), so {} was written in place, not atomically",
-                dir.display(),
-                path.display()
-            )));
-        }
-        Err(e) => {
-            return Err(anyhow::Error::new(e).context(format!(
-                "{}: cannot create a file in {}",
-                path.display(),
-                dir.display()
-            )));
+            return Ok(Written::InPlace(why));
         }
     };
-    let Some(file) = tmp.file.as_mut() else {
-        bail!("{}: the temporary file is gone", path.display());
-    };
-    if let Some(old) = &existing
-        && !keep_owner(file, old)
-    {
-        drop(tmp);
-        write_in_place(path, &target, bytes)?;
-        return Ok(Written::InPlace(format!(
-            "{} belongs to another user or group that a new file cannot be given, so it was \
-             written in place, not atomically, to keep its owner",
-            path.display()
-        )));
-    }
-    let written = file
-        .write_all(bytes)
-        .and_then(|()| match &existing {
-            Some(old) => file.set_permissions(old.permissions()),
-            None => Ok(()),
-        })
-        .and_then(|()| file.sync_all());
-    if let Err(e) = written {
-        return Err(anyhow::Error::new(e).context(format!("{}: cannot write", path.display())));
-    }
-    drop(tmp.file.take());
-    fs::rename(&tmp.path, &target).with_context(|| {
+    file.write_all(bytes)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    file.commit().with_context(|| {
         format!(
             "{}: cannot move the new contents into place",
             path.display()
         )
     })?;
-    tmp.renamed = true;
-    // The rename is only durable once the folder's entry is on disk; where a folder cannot be
-    // synced the file itself still is.
-    if let Ok(d) = File::open(dir) {
-        let _ = d.sync_all();
-    }
-    Ok(Written::Replaced)
+    Ok(Written::replaced(path, existing.as_ref()))
 }
 
 /// A result file written piece by piece (a frame at a time), then put in place whole.
 ///
-/// The same temporary file as [`write_atomic`]'s, `.NAME.clothsim-tmp.PID` next to the
-/// result, receives the bytes; [`StreamFile::finish`] gives it the old file's mode and owner,
-/// syncs it and renames it over the result. Dropped unfinished (an error, a panic) or ended by
-/// a signal (once [`cleanup_on_signals`] was called), it is removed and the old file stays as
-/// it was. A result with several names (hard links) gets the finished bytes copied in place,
-/// so every name sees them. It can seek, so a header can be completed at the end.
+/// The same temporary file as [`write_atomic`]'s receives the bytes; [`StreamFile::finish`]
+/// syncs it and renames it over the result, keeping the old file's mode and owner. Dropped
+/// unfinished (an error, a panic) it is removed, and the old file stays as it was; ended by a
+/// signal or a kill, it leaves nothing on Linux (see the module doc). When the result's owner
+/// cannot be kept, the finished bytes are copied in place instead. It can seek, so a header can
+/// be completed at the end.
 pub struct StreamFile {
     path: PathBuf,
     target: PathBuf,
     existing: Option<fs::Metadata>,
-    tmp: TempFile,
-    out: std::io::BufWriter<File>,
+    /// Why the finished bytes must be copied in place, when they must.
+    in_place: Option<String>,
+    out: std::io::BufWriter<AtomicWriteFile>,
 }
 
 impl std::fmt::Debug for StreamFile {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("StreamFile")
             .field("path", &self.path)
-            .field("tmp", &self.tmp.path)
+            .field("target", &self.target)
             .finish_non_exhaustive()
     }
 }
@@ -375,44 +269,36 @@ impl StreamFile {
     /// read-only folder, a FIFO or device (a stream that is put in place at the end must be a
     /// regular file).
     pub fn create(path: &Path) -> anyhow::Result<Self> {
-        check_target(path)?;
-        let target = resolve(path)?;
-        let existing = match fs::metadata(&target) {
-            Ok(m) => Some(m),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-            Err(e) => {
-                return Err(
-                    anyhow::Error::new(e).context(format!("{}: cannot write", path.display()))
-                );
-            }
-        };
+        let (target, existing) = target_of(path)?;
         if existing.as_ref().is_some_and(|m| !m.is_file()) {
             bail!(
                 "{}: not a regular file; this output is written to a file, then put in place",
                 path.display()
             );
         }
-        let dir = parent_of(&target);
-        let Some(name) = target.file_name().map(|n| n.to_string_lossy().into_owned()) else {
-            bail!("{}: not a file name", path.display());
-        };
-        remove_leftovers(dir);
-        let mode = if existing.is_some() { 0o600 } else { 0o666 };
-        let mut tmp = TempFile::create(dir, &name, mode).map_err(|e| {
+        let cannot_create = |e: std::io::Error| {
             anyhow::Error::new(e).context(format!(
                 "{}: cannot create a file in {}",
                 path.display(),
-                dir.display()
+                parent_of(&target).display()
             ))
-        })?;
-        let Some(file) = tmp.file.take() else {
-            bail!("{}: the temporary file is gone", path.display());
+        };
+        let (file, in_place) = match open_temporary(&target, true) {
+            Ok(f) => (f, None),
+            // Only an owner that cannot be kept is got around: a folder that does not allow
+            // new files cannot hold the stream's bytes either.
+            Err(e) if existing.is_some() && e.kind() == std::io::ErrorKind::PermissionDenied => {
+                let f = open_temporary(&target, false).map_err(cannot_create)?;
+                let why = in_place_instead(path, &target, &e);
+                (f, why)
+            }
+            Err(e) => return Err(cannot_create(e)),
         };
         Ok(Self {
             path: path.to_owned(),
             target,
             existing,
-            tmp,
+            in_place,
             out: std::io::BufWriter::with_capacity(256 * 1024, file),
         })
     }
@@ -431,49 +317,29 @@ impl StreamFile {
             path,
             target,
             existing,
-            mut tmp,
+            in_place,
             out,
         } = self;
-        let file = out
+        let mut file = out
             .into_inner()
             .map_err(|e| anyhow::Error::new(e.into_error()))
             .with_context(|| format!("{}: cannot write", path.display()))?;
-        #[cfg(unix)]
-        if let Some(old) = &existing {
-            use std::os::unix::fs::MetadataExt;
-            if old.nlink() > 1 || !keep_owner(&file, old) {
-                drop(file);
-                let bytes = fs::read(&tmp.path)
-                    .with_context(|| format!("{}: cannot read back", path.display()))?;
-                drop(tmp);
-                write_in_place(&path, &target, &bytes)?;
-                return Ok(Written::InPlace(format!(
-                    "{} has other names (hard links) or an owner a new file cannot be given, so \
-                     it was written in place, not atomically",
-                    path.display()
-                )));
-            }
+        if let Some(why) = in_place {
+            let mut bytes = Vec::new();
+            file.seek(SeekFrom::Start(0))
+                .and_then(|_| file.read_to_end(&mut bytes))
+                .with_context(|| format!("{}: cannot read back", path.display()))?;
+            drop(file);
+            write_in_place(&path, &target, &bytes)?;
+            return Ok(Written::InPlace(why));
         }
-        let synced = match &existing {
-            Some(old) => file.set_permissions(old.permissions()),
-            None => Ok(()),
-        }
-        .and_then(|()| file.sync_all());
-        if let Err(e) = synced {
-            return Err(anyhow::Error::new(e).context(format!("{}: cannot write", path.display())));
-        }
-        drop(file);
-        fs::rename(&tmp.path, &target).with_context(|| {
+        file.commit().with_context(|| {
             format!(
                 "{}: cannot move the new contents into place",
                 path.display()
             )
         })?;
-        tmp.renamed = true;
-        if let Ok(d) = File::open(parent_of(&target)) {
-            let _ = d.sync_all();
-        }
-        Ok(Written::Replaced)
+        Ok(Written::replaced(&path, existing.as_ref()))
     }
 }
 
@@ -491,97 +357,53 @@ impl Write for StreamFile {
     }
 }
 
-impl std::io::Seek for StreamFile {
-    fn seek(&mut self, pos: std::io::SeekFrom) -> std::io::Result<u64> {
+impl Seek for StreamFile {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
         self.out.seek(pos)
     }
 }
 
-/// Gives the temporary file the old file's owner and group when they differ from ours; false
-/// when the system does not allow it (only the superuser may give a file away).
-#[cfg(unix)]
-fn keep_owner(file: &File, old: &fs::Metadata) -> bool {
-    use std::os::unix::fs::MetadataExt;
-    let Ok(new) = file.metadata() else {
-        return false;
-    };
-    if new.uid() == old.uid() && new.gid() == old.gid() {
-        return true;
-    }
-    let uid = (new.uid() != old.uid()).then_some(old.uid());
-    std::os::unix::fs::fchown(file, uid, Some(old.gid())).is_ok()
-}
-
-#[cfg(not(unix))]
-fn keep_owner(_: &File, _: &fs::Metadata) -> bool {
-    true
-}
-
 /// Overwrites `target` (the resolved `path`) in place.
+///
+/// A regular file gets the bytes past its old end first: a full disk shows there, and the file
+/// is cut back to its old length, whole. The rest overwrites blocks the file already has, which
+/// needs no new space on a file system that writes in place (not on a copy-on-write one).
 fn write_in_place(path: &Path, target: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let cannot = || format!("{}: cannot write", path.display());
     let mut f = OpenOptions::new()
         .write(true)
-        .truncate(true)
         .create(true)
+        .truncate(false)
         .open(target)
         .with_context(|| format!("{}: cannot open for writing", path.display()))?;
-    f.write_all(bytes)
-        .and_then(|()| f.flush())
-        .with_context(|| format!("{}: cannot write", path.display()))?;
-    // A FIFO or a terminal cannot be synced; a regular file must be.
-    if f.metadata().is_ok_and(|m| m.is_file()) {
-        f.sync_all()
-            .with_context(|| format!("{}: cannot write", path.display()))?;
-    }
-    Ok(())
-}
-
-/// Removes temporary files in `dir` left by clothsim processes that no longer run.
-fn remove_leftovers(dir: &Path) {
-    let Ok(entries) = fs::read_dir(dir) else {
-        return;
+    // A FIFO or a terminal has no old contents to keep and cannot be synced.
+    let old = match f.metadata() {
+        Ok(m) if m.is_file() => m.len(),
+        _ => {
+            return f
+                .write_all(bytes)
+                .and_then(|()| f.flush())
+                .with_context(cannot);
+        }
     };
-    let me = std::process::id();
-    for entry in entries.flatten() {
-        let name = entry.file_name();
-        let Some(pid) = leftover_pid(&name.to_string_lossy()) else {
-            continue;
-        };
-        if pid != me && !process_runs(pid) && entry.file_type().is_ok_and(|t| t.is_file()) {
-            let _ = fs::remove_file(entry.path());
+    let keep = usize::try_from(old).map_or(bytes.len(), |old| old.min(bytes.len()));
+    let (head, tail) = bytes.split_at(keep);
+    if !tail.is_empty() {
+        let grown = f
+            .seek(SeekFrom::Start(old))
+            .and_then(|_| f.write_all(tail))
+            .and_then(|()| f.sync_data());
+        if let Err(e) = grown {
+            // Back to the old contents, whole.
+            let _ = f.set_len(old).and_then(|()| f.sync_all());
+            return Err(anyhow::Error::new(e).context(cannot()));
         }
     }
-}
-
-/// The process id in a temporary file's name (`.NAME.clothsim-tmp.PID` or `...PID.N`).
-fn leftover_pid(name: &str) -> Option<u32> {
-    if !name.starts_with('.') {
-        return None;
-    }
-    let (_, tail) = name.rsplit_once(TMP_MARK)?;
-    let digits = tail.split('.').next()?;
-    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
-        return None;
-    }
-    digits.parse().ok()
-}
-
-/// Whether a process with this id exists (one of another user counts).
-#[cfg(unix)]
-fn process_runs(pid: u32) -> bool {
-    let Ok(pid) = libc::pid_t::try_from(pid) else {
-        return true;
-    };
-    // SAFETY: signal 0 only asks whether the process exists and may be signalled; nothing is
-    // sent and no memory is touched.
-    #[allow(unsafe_code)]
-    let r = unsafe { libc::kill(pid, 0) };
-    r == 0 || std::io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
-}
-
-#[cfg(not(unix))]
-fn process_runs(_: u32) -> bool {
-    true
+    f.seek(SeekFrom::Start(0))
+        .and_then(|_| f.write_all(head))
+        .and_then(|()| f.set_len(bytes.len() as u64))
+        .and_then(|()| f.sync_all())
+        .with_context(cannot)
 }
 
 #[cfg(test)]
@@ -667,16 +489,46 @@ mod tests {
 
     #[cfg(unix)]
     #[test]
-    fn a_hard_linked_file_is_written_in_place_so_every_name_sees_it_and_says_so() {
+    fn a_hard_linked_file_is_replaced_whole_and_the_note_says_the_other_names_keep_the_old() {
         let dir = tempfile::tempdir().unwrap();
         let one = dir.path().join("one.json");
         let two = dir.path().join("two.json");
         fs::write(&one, b"old").unwrap();
         fs::hard_link(&one, &two).unwrap();
         let w = write_atomic(&one, b"new contents").unwrap();
-        assert!(w.note().unwrap().contains("2 names (hard links)"), "{w:?}");
-        assert_eq!(fs::read(&two).unwrap(), b"new contents");
+        let note = w.note().unwrap();
+        assert!(note.contains("had 2 names (hard links)"), "{w:?}");
+        assert!(
+            note.contains("other names still show the old contents"),
+            "{w:?}"
+        );
+        assert_eq!(fs::read(&one).unwrap(), b"new contents");
+        assert_eq!(fs::read(&two).unwrap(), b"old");
         assert_eq!(names(dir.path()), ["one.json", "two.json"]);
+    }
+
+    #[test]
+    fn a_write_in_place_that_grows_the_file_keeps_short_and_long_contents_right() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("f");
+        fs::write(&path, b"0123456789").unwrap();
+        write_in_place(&path, &path, b"abc").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"abc");
+        write_in_place(&path, &path, b"a longer text").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"a longer text");
+        write_in_place(&path, &path, b"").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"");
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_write_in_place_that_meets_a_full_device_changes_nothing() {
+        // /dev/full is a device, written as it is: the error comes back, naming the path.
+        let e = format!(
+            "{:#}",
+            write_atomic(Path::new("/dev/full"), b"x").unwrap_err()
+        );
+        assert!(e.contains("/dev/full: cannot write"), "{e}");
     }
 
     #[cfg(unix)]
@@ -690,7 +542,7 @@ mod tests {
         fs::write(&path, b"old").unwrap();
         fs::set_permissions(&sub, fs::Permissions::from_mode(0o555)).unwrap();
         // The superuser may create files in a read-only folder: then the write is atomic.
-        let can_create = File::create(sub.join("probe")).is_ok();
+        let can_create = fs::File::create(sub.join("probe")).is_ok();
         let w = write_atomic(&path, b"new");
         fs::set_permissions(&sub, fs::Permissions::from_mode(0o755)).unwrap();
         let w = w.unwrap();
@@ -713,34 +565,6 @@ mod tests {
             check_target(&dir.path().join("no/such/state.json")).unwrap_err()
         );
         assert!(e.contains("cannot be used"), "{e}");
-    }
-
-    #[cfg(unix)]
-    #[test]
-    fn leftovers_of_dead_processes_are_removed_by_the_next_write_and_live_ones_kept() {
-        let dir = tempfile::tempdir().unwrap();
-        // A process id that no process has: above Linux's largest pid_max (2^22).
-        let dead = dir.path().join(".state.json.clothsim-tmp.4194305");
-        let live = dir
-            .path()
-            .join(format!(".other.json.clothsim-tmp.{}", std::process::id()));
-        let unrelated = dir.path().join(".state.json.clothsim-tmp.notapid");
-        for p in [&dead, &live, &unrelated] {
-            fs::write(p, b"partial").unwrap();
-        }
-        write_atomic(&dir.path().join("state.json"), b"x").unwrap();
-        assert!(!dead.exists());
-        assert!(live.exists(), "our own process's file may be in flight");
-        assert!(unrelated.exists(), "not a name clothsim makes");
-    }
-
-    #[test]
-    fn temporary_names_carry_the_process_id() {
-        assert_eq!(leftover_pid(".state.json.clothsim-tmp.123"), Some(123));
-        assert_eq!(leftover_pid(".state.json.clothsim-tmp.123.4"), Some(123));
-        assert_eq!(leftover_pid("state.json.clothsim-tmp.123"), None);
-        assert_eq!(leftover_pid(".state.json.clothsim-tmp."), None);
-        assert_eq!(leftover_pid(".state.json"), None);
     }
 
     #[test]

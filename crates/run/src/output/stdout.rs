@@ -5,58 +5,51 @@
 //! `ripgrep`. Every other write error is reported once, naming standard output and the cause.
 //!
 //! A standard output closed before the program started (`clothsim scenes >&-`) needs care: the
-//! runtime quietly reopens descriptors 0 to 2 on `/dev/null` before `main`, so writes would
-//! succeed and the output vanish. A constructor that runs before the runtime notes whether
-//! descriptor 1 was open, and [`Stdout`] refuses to write when it was not.
+//! Rust runtime quietly reopens descriptors 0 to 2 on `/dev/null` before `main`, so writes would
+//! succeed and the output vanish. The runtime opens `/dev/null` for reading and writing, which a
+//! shell's `>/dev/null` (write only) never does, so the first use of standard output looks at
+//! descriptor 1 and [`Stdout`] refuses to write when it is the runtime's stand-in (or still
+//! closed, in a program that skipped the runtime's start-up).
 
 use std::io::{self, IsTerminal, Write};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::OnceLock;
 
-/// Set before `main` when descriptor 1 was closed at start (see the module doc).
-static CLOSED_AT_START: AtomicBool = AtomicBool::new(false);
-
-/// Notes whether standard output was open when the process started.
-///
-/// Runs from the platform's initialiser list, before the Rust runtime replaces a closed
-/// descriptor with `/dev/null`.
-#[cfg(unix)]
-extern "C" fn note_closed_stdout() {
-    // SAFETY: `fcntl(F_GETFD)` only reads the descriptor's flags; it touches no memory of ours
-    // and is safe to call before the Rust runtime has started.
-    #[allow(unsafe_code)]
-    let flags = unsafe { libc::fcntl(libc::STDOUT_FILENO, libc::F_GETFD) };
-    if flags == -1 {
-        CLOSED_AT_START.store(true, Ordering::Relaxed);
-    }
+/// Whether standard output was closed when the process started (see the module doc).
+fn closed_at_start() -> bool {
+    static CLOSED: OnceLock<bool> = OnceLock::new();
+    *CLOSED.get_or_init(stdout_is_a_stand_in)
 }
 
-// NOTE: `.init_array` (ELF) and `__mod_init_func` (Mach-O) entries run before `main` and before
-// the Rust runtime's own start-up, which is what this check needs. `#[used]` keeps the entry
-// alive although nothing names it.
-#[cfg(any(
-    target_os = "linux",
-    target_os = "android",
-    target_os = "freebsd",
-    target_os = "netbsd",
-    target_os = "openbsd",
-    target_os = "dragonfly",
-    target_os = "illumos",
-    target_os = "solaris"
-))]
-#[allow(unsafe_code)]
-#[used]
-#[unsafe(link_section = ".init_array")]
-static NOTE_CLOSED_STDOUT: extern "C" fn() = note_closed_stdout;
+/// Whether descriptor 1 is closed, or the read-write `/dev/null` the runtime puts in place of a
+/// closed one.
+#[cfg(unix)]
+fn stdout_is_a_stand_in() -> bool {
+    use std::os::fd::AsFd;
+    use std::os::unix::fs::{FileTypeExt, MetadataExt};
+    // SAFETY: `fcntl(F_GETFL)` only reads the descriptor's status flags; it touches no memory.
+    #[allow(unsafe_code)]
+    let flags = unsafe { libc::fcntl(libc::STDOUT_FILENO, libc::F_GETFL) };
+    if flags == -1 {
+        return true;
+    }
+    if flags & libc::O_ACCMODE != libc::O_RDWR {
+        return false;
+    }
+    let Ok(fd) = io::stdout().as_fd().try_clone_to_owned() else {
+        return false;
+    };
+    let (Ok(ours), Ok(null)) = (
+        std::fs::File::from(fd).metadata(),
+        std::fs::metadata("/dev/null"),
+    ) else {
+        return false;
+    };
+    ours.file_type().is_char_device() && ours.rdev() == null.rdev()
+}
 
-#[cfg(any(target_os = "macos", target_os = "ios"))]
-#[allow(unsafe_code)]
-#[used]
-#[unsafe(link_section = "__DATA,__mod_init_func")]
-static NOTE_CLOSED_STDOUT: extern "C" fn() = note_closed_stdout;
-
-/// Whether standard output was closed when clothsim started.
-fn closed_at_start() -> bool {
-    CLOSED_AT_START.load(Ordering::Relaxed)
+#[cfg(not(unix))]
+fn stdout_is_a_stand_in() -> bool {
+    false
 }
 
 /// A write to standard output failed.
@@ -97,8 +90,8 @@ pub fn ended_by_reader(e: &anyhow::Error) -> bool {
 
 /// Buffered standard output that refuses to write into a closed one (see the module doc).
 ///
-/// Errors come back as [`io::Error`]s; turn them into the command's error with
-/// [`stdout_error`] (the `?` on [`Stdout::write_all_or_fail`] and [`Stdout::finish`] does it).
+/// Its [`Write`] methods give [`io::Error`]s; [`Stdout::write_all_or_fail`],
+/// [`Stdout::flush_or_fail`] and [`Stdout::finish`] give the command's error, one message.
 pub struct Stdout {
     out: io::BufWriter<io::StdoutLock<'static>>,
 }
@@ -119,7 +112,7 @@ impl Stdout {
     /// Writes `bytes`, as the command's error on failure.
     ///
     /// # Errors
-    /// [`StdoutError`] (see [`ended_by_reader`] for the normal end).
+    /// Naming standard output and the cause ([`ended_by_reader`] tells the normal end apart).
     pub fn write_all_or_fail(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         self.write_all(bytes).map_err(stdout_error)
     }
