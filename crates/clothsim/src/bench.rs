@@ -17,9 +17,8 @@
 //! those names of the solvers that have them (Verlet's). With `--interleave` each row gives two
 //! ratios to the grid's first configuration: the median over rounds of the two frames' ratio
 //! (the typical frame), and the ratio of the mean frame times (what a user waits for over the
-//! whole run, the fall's costly frames included). Criterion benches (`cargo bench -p
-//! cloth-solver`) are the measurement of record; this command lets a user reproduce the
-//! README's table.
+//! whole run, the fall's costly frames included). `scripts/performance` runs it for the table of
+//! docs/performance.md; criterion benches (`cargo bench -p cloth-solver`) time the kernels.
 
 use std::fmt::Write as _;
 
@@ -384,12 +383,6 @@ fn time_grid(args: &Args, configs: &[Config], n: usize) -> anyhow::Result<Vec<Ro
         .collect())
 }
 
-/// Whether the timed cloth held together: the divergence guard of `simulate` and `render`
-/// watches one more window of frames after the timing (a run that ended non-finite, or whose
-/// speed and energy are still growing without bound, is no timing of a cloth).
-///
-/// # Errors
-/// The divergence, with its advice.
 /// Refuses grid `n` when a configuration would need more memory than `--max-memory` (or the
 /// memory available): without `--interleave` one configuration at a time, with it all at once.
 fn check_memory(args: &Args, configs: &[Config], mesh: &ClothMesh, n: usize) -> anyhow::Result<()> {
@@ -418,6 +411,12 @@ fn check_memory(args: &Args, configs: &[Config], mesh: &ClothMesh, n: usize) -> 
     Ok(())
 }
 
+/// Whether the timed cloth held together: the divergence guard of `simulate` and `render`
+/// watches one more window of frames after the timing (a run that ended non-finite, or whose
+/// speed and energy are still growing without bound, is no timing of a cloth).
+///
+/// # Errors
+/// The divergence, with its advice.
 fn held_together(
     solver: &mut dyn Solver,
     mesh: &ClothMesh,
