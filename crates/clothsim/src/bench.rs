@@ -18,9 +18,8 @@
 //! those names of the solvers that have them (Verlet's). With `--interleave` each row gives two
 //! ratios to the grid's first configuration: the median over rounds of the two frames' ratio
 //! (the typical frame), and the ratio of the mean frame times (what a user waits for over the
-//! whole run, the fall's costly frames included). Criterion benches (`cargo bench -p
-//! cloth-solver`) are the measurement of record; this command lets a user reproduce the
-//! README's table.
+//! whole run, the fall's costly frames included). `scripts/performance` runs it for the table of
+//! docs/performance.md; criterion benches (`cargo bench -p cloth-solver`) time the kernels.
 
 use std::fmt::Write as _;
 

@@ -579,7 +579,7 @@ mod tests {
 
     /// Four `pinned4` variants for 3 s simulated (270 frames) through the live UI's coordinator:
     /// at real time (is it kept?) and at sixteen times (how fast can the group go?). Prints the
-    /// figures docs/performance.md gives; asserts only the lockstep.
+    /// wall and processor time and the real-time factor; asserts only the lockstep.
     #[test]
     #[ignore = "a measurement: run in release with --nocapture"]
     fn four_pinned4_variants_for_three_simulated_seconds() {

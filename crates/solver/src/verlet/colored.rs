@@ -7,7 +7,7 @@
 //! a few springs per point and step. In the course's order each correction moves points that
 //! the next spring reads, so the sweep is one long chain of dependent square roots and
 //! divisions, and that latency, not the work, dominates the step. No pre-pass helps: almost
-//! nothing can be proven inside the limit. (docs/performance.md gives the counts.)
+//! nothing can be proven inside the limit.
 //!
 //! # How
 //!
