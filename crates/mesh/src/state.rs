@@ -79,7 +79,11 @@ mod tests {
             *l -= Vec3::new(0.0, 1e-4 * (i % 7) as f64, 3e-5);
         }
         let velocity = |s: &ClothState, dt: f64| -> Vec<Vec3> {
-            s.positions.iter().zip(&s.last).map(|(p, l)| (p - l) / dt).collect()
+            s.positions
+                .iter()
+                .zip(&s.last)
+                .map(|(p, l)| (p - l) / dt)
+                .collect()
         };
         let before = velocity(&state, 1.0 / 2700.0);
         let same = state.clone();
