@@ -55,12 +55,13 @@
 //!   drag (5.4 1/s) takes any motion down by e^-21 in 4 s, so what remains is motion the solver
 //!   keeps up. On scenes with contact the mean over the last second of the RMS point speed over
 //!   each frame (a point's displacement over the frame's duration: the step velocity of a
-//!   resting point swings with the collision offset at every step) is under 2 cm/s or three
-//!   times the largest of Verlet's at `ks` x {1, 1 - 2e-4, 1 + 2e-4}, whichever is larger:
-//!   cloth on a sphere or in folds creeps against friction for seconds in the model itself, by
-//!   bursts whose timing turns on rounding, so the bound is the reference's own creep, taken
-//!   over a second and over perturbations of the case so that it does not hang on where one
-//!   run happens to be.
+//!   resting point swings with the collision offset at every step) is under 2 cm/s. Either
+//!   bound gives way to three times the largest of Verlet's own figure at `ks` x {1, 1 - 2e-4,
+//!   1 + 2e-4} where that is larger: cloth on a sphere or in folds creeps against friction for
+//!   seconds in the model itself, and cloth whose layers touch (pinned2 hanging 3.3 times
+//!   stretched with the limit off folds onto itself) jitters under self-collision's pushes, by
+//!   bursts whose timing turns on rounding; the bound is then the reference's own motion, taken
+//!   over perturbations of the case so that it does not hang on where one run happens to be.
 //! - **swap to**, **swap back**, **edit** (relative change of the kinetic energy): from
 //!   Verlet's run at frames 10, 20 and 40 of pinned4 and sphere (falling, catching, rebounding
 //!   or in contact), the solver takes over at its own steps per frame and its kinetic energy
@@ -75,8 +76,9 @@
 //! - **time** (`time`, s): the case's wall-clock time is within its budget (below).
 //!
 //! Verlet's figures that the bounds scale with are constants of the tree, written by the
-//! ignored generator `write_verlet_figures` (`cargo test -p cloth-check --release -- --ignored
-//! write_verlet_figures`), so a check never runs Verlet's reference. Verlet runs each case at
+//! ignored generator `write_verlet_figures` (`CLOTH_CHECK_WRITE_FIGURES=1 cargo test -p
+//! cloth-check --release -- --ignored write_verlet_figures`), so a check never runs Verlet's
+//! reference. Verlet runs each case at
 //! the course's 30 steps per frame, or at more where `ks` asks for them (200 at 1e6 N/m, in
 //! proportion to `sqrt(ks)`: an explicit step's stable size goes as `sqrt(m / k)`), with its
 //! damping and friction retimed to keep their rates.
@@ -100,11 +102,13 @@
 //!
 //! # Budgets
 //!
-//! Each case may take ten times Verlet's time on the same case (at Verlet's steps per frame for
-//! its `ks`) plus two seconds; a run past its budget is stopped there and the case fails as too
+//! Each case may take twenty times Verlet's time on the same case (at Verlet's steps per frame
+//! for its `ks`) plus five seconds; a run past its budget is stopped there and the case fails as too
 //! slow, so a check takes a bounded time whatever the solver. Verlet's time is measured when
 //! the check starts, on the same machine: the fastest of three runs of three frames of each
-//! scene, scaled to the case's steps and frames.
+//! scene, scaled to the case's steps and frames. Those first frames are the cheapest (later
+//! ones meet self-collision's folds), hence the generous multiple. Cases run on one thread per
+//! core ([`CheckOptions::threads`]); the calibration runs alone before them.
 //!
 //! # Expected failures
 //!
