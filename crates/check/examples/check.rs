@@ -35,9 +35,7 @@ fn main() -> ExitCode {
         }
     };
     let report = cloth_check::check_each(&entry, &serde_json::json!({}), &options, &mut |c| {
-        if !json {
-            eprintln!("{c}");
-        }
+        eprintln!("{c}");
     });
     match report {
         Ok(report) => {

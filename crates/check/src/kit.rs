@@ -60,9 +60,9 @@ pub const SETTLE_VERLET_FACTOR: f64 = 3.0;
 /// The relative change of kinetic energy a swap or an edit may make over its first frame.
 pub const SWAP_SHARE: f64 = 0.05;
 /// A case may take this many times Verlet's time on it, as measured by the calibration: its
-/// first frames, before self-collision meets the folds that make its later frames several times
-/// dearer.
-pub const BUDGET_MULTIPLE: f64 = 20.0;
+/// first frames, cheaper than its later ones (Verlet's own whole runs take two to eleven times
+/// what the calibration gives them), so the multiple is generous.
+pub const BUDGET_MULTIPLE: f64 = 40.0;
 /// And this many seconds more, for building the solver (a factorisation) and for the noise of
 /// a shared machine on short runs.
 pub const BUDGET_FLOOR: f64 = 5.0;
@@ -594,11 +594,11 @@ mod tests {
     fn a_solver_that_moves_a_pin_by_a_bit_fails_the_pins() {
         const CREEP: SolverEntry = SolverEntry::new("creep", "moves a pin", |mesh, _| {
             broken(mesh, |mesh, state, steps| {
-                if steps == 100 {
-                    if let Some(i) = mesh.pinned().iter().position(|p| *p) {
-                        state.positions[i].x = f64::from_bits(state.positions[i].x.to_bits() + 1);
-                        state.last[i] = state.positions[i];
-                    }
+                if steps == 100
+                    && let Some(i) = mesh.pinned().iter().position(|p| *p)
+                {
+                    state.positions[i].x = f64::from_bits(state.positions[i].x.to_bits() + 1);
+                    state.last[i] = state.positions[i];
                 }
             })
         });
