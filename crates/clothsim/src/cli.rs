@@ -19,7 +19,7 @@ use clap_complete::Shell;
 use cloth_render::{ColorChoice, Mode, View};
 use cloth_solver::{OptionKind, Registry};
 
-use crate::{bench, render, scenes, simulate};
+use crate::{bench, check, render, scenes, simulate};
 use cloth_run::solvers;
 use cloth_tui as app;
 /// The name the program is known by in its help, version, completions and man page, when no
@@ -73,6 +73,9 @@ enum Command {
     Solvers,
     /// Time solvers: ms per frame, particle-steps per second, real-time factor.
     Bench(bench::Args),
+    /// Judge solvers by the conformance kit: every bundled scene's cases, each measure (energy,
+    /// pins, stretch limit, settling, swaps) against its bound; exit 1 when a case fails.
+    Check(check::Args),
     /// Print a shell completion script (commands, options, their values, bundled scenes).
     ///
     /// bash: `clothsim completions bash > ~/.local/share/bash-completion/completions/clothsim`;
@@ -104,6 +107,7 @@ impl Cli {
             Some(Command::Simulate(args)) => simulate::run(&args, registry),
             Some(Command::Render(args)) => render::run(&args, registry),
             Some(Command::Bench(args)) => bench::run(&args, registry),
+            Some(Command::Check(args)) => check::run(&args, registry),
             Some(Command::Scenes) => scenes::run(),
             Some(Command::Solvers) => print(solvers::listing(registry).as_bytes()),
             Some(Command::Completions { shell }) => print(&completions(registry, program, shell)),

@@ -21,6 +21,7 @@
 
 mod args;
 mod bench;
+mod check;
 mod cli;
 mod render;
 mod scenes;

@@ -1,0 +1,62 @@
+//! What can stop a check before it has a report.
+
+use cloth_solver::OptionError;
+
+/// Why a check (or a run for frames as text) could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckError {
+    /// The solver cannot be built with the options given.
+    #[error("the {solver} solver cannot be checked: {source}")]
+    Build {
+        /// The solver.
+        solver: String,
+        /// Why its entry refused.
+        #[source]
+        source: OptionError,
+    },
+    /// A scene asked for is not bundled.
+    #[error("unknown scene {name:?}; the bundled scenes are: {available}")]
+    UnknownScene {
+        /// The name asked for.
+        name: String,
+        /// The bundled names, comma-separated.
+        available: String,
+    },
+    /// A bundled scene does not load (a broken build).
+    #[error(transparent)]
+    Scene(#[from] cloth_scene::SceneError),
+    /// A swap case could not be run to its end.
+    #[error("the {solver} solver's swap at frame {frame}: {reason}")]
+    Swap {
+        /// The solver.
+        solver: String,
+        /// The frame of Verlet's run at which it swapped.
+        frame: usize,
+        /// What failed.
+        reason: String,
+    },
+    /// A list of figures kept in the crate does not parse (a broken build).
+    #[error("the kit's {file} does not parse: {reason}")]
+    Data {
+        /// The file.
+        file: &'static str,
+        /// The parser's message.
+        reason: String,
+    },
+    /// A frame could not be drawn.
+    #[error(transparent)]
+    Render(#[from] cloth_render::RenderError),
+    /// A frame of a run for frames as text failed.
+    #[error("frame {frame} of {scene} under {solver}: {source}")]
+    Step {
+        /// The scene.
+        scene: String,
+        /// The solver.
+        solver: String,
+        /// The frame that failed.
+        frame: usize,
+        /// The solver's error.
+        #[source]
+        source: cloth_solver::SolveError,
+    },
+}
