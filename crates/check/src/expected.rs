@@ -36,8 +36,15 @@ pub(crate) fn load() -> Result<Vec<ExpectedFailure>, CheckError> {
 /// NOTE: a listed case that was too slow and now keeps to its budget is not held to "passes
 /// now": its time moves with the machine's load by more than the margin of a borderline case,
 /// so that verdict would flip from run to run. Its physics measures, now computed over the whole
-/// run, are held to their bounds as any case's are.
+/// run, are held to their bounds as any case's are. Likewise the listed measures of a case
+/// stopped at its budget are not held to "passes now".
 pub(crate) fn apply(list: &[ExpectedFailure], solver: &str, case: &mut CaseReport) {
+    // A case stopped at its budget measured part of its run: a listed measure that passes
+    // over that part says nothing of the whole, so it is not "passes now" either.
+    let stopped = case
+        .measures
+        .iter()
+        .any(|m| m.name == crate::kit::TIME && m.outcome == Outcome::Fail);
     for m in &mut case.measures {
         let listed = list
             .iter()
@@ -45,7 +52,7 @@ pub(crate) fn apply(list: &[ExpectedFailure], solver: &str, case: &mut CaseRepor
         if listed {
             m.outcome = match m.outcome {
                 Outcome::Fail | Outcome::ExpectedFail => Outcome::ExpectedFail,
-                Outcome::Pass if m.name == crate::kit::TIME => Outcome::Pass,
+                Outcome::Pass if stopped || m.name == crate::kit::TIME => Outcome::Pass,
                 Outcome::Pass | Outcome::PassesNow => Outcome::PassesNow,
             };
         }
@@ -103,5 +110,46 @@ mod tests {
         apply(&list, "another", &mut other);
         other.judge();
         assert_eq!(other.verdict, Verdict::Fail);
+    }
+
+    #[test]
+    fn a_listed_time_or_a_measure_of_a_stopped_case_that_passes_is_not_passes_now() {
+        let case = |time: f64, rise: f64| CaseReport {
+            id: "hammock / 1 step".to_owned(),
+            scene: "hammock".to_owned(),
+            steps_per_frame: 1,
+            stretch_limit: Some(true),
+            self_collision: Some(true),
+            ks: 5000.0,
+            swap_frame: None,
+            measures: vec![
+                Measure::at_most("energy rise", rise, 3.0, "J"),
+                Measure::at_most(crate::kit::TIME, time, 20.0, "s"),
+            ],
+            verdict: Verdict::Pass,
+            note: None,
+        };
+        let listed = |measure: &str| ExpectedFailure {
+            solver: "mine".to_owned(),
+            case: "hammock / 1 step".to_owned(),
+            measure: measure.to_owned(),
+            figure: 1.0,
+        };
+        let list = vec![listed("energy rise"), listed(crate::kit::TIME)];
+        // Within its budget now, its energy still failing as listed: an expected failure.
+        let mut quick = case(5.0, 7.0);
+        apply(&list, "mine", &mut quick);
+        quick.judge();
+        assert_eq!(quick.verdict, Verdict::ExpectedFail);
+        // Stopped at its budget before the rise it is listed for: still only expected.
+        let mut stopped = case(25.0, 0.0);
+        apply(&list, "mine", &mut stopped);
+        stopped.judge();
+        assert_eq!(stopped.verdict, Verdict::ExpectedFail);
+        // A listed energy rise that passes over a whole run is passes-now, as any listed pass.
+        let mut mended = case(5.0, 0.0);
+        apply(&list, "mine", &mut mended);
+        mended.judge();
+        assert_eq!(mended.verdict, Verdict::Fail);
     }
 }
