@@ -1,12 +1,13 @@
-//! `clothsim tui`: the live terminal UI (the default command).
+//! clothsim's live terminal UI (`clothsim tui`, the default command): it draws a `cloth_run::Run`
+//! and reads keys; the command line and the files are the binary's and the run crate's.
 //!
 //! Elm architecture: a model ([`App`]), messages ([`Message`]), one [`update()`] function that
-//! changes the model, and a pure [`view()`]. Terminal events become messages in [`input`]
-//! (after [`escape`] joins split escape sequences); the one [`keymap::KEYMAP`] dispatches keys
-//! and generates the footer and the help; the one [`params::PARAMS`] table drives the
-//! parameter panel. The cloth steps on its own thread ([`worker`]), which owns the simulation
+//! changes the model, and a pure [`view()`]. Terminal events become messages in `input`
+//! (after `escape` joins split escape sequences); the one `keymap::KEYMAP` dispatches keys
+//! and generates the footer and the help; the one `params::PARAMS` table drives the
+//! parameter panel. The cloth steps on its own thread (`worker`), which owns the simulation
 //! clock (compare mode's variants on one coordinator that steps them in lockstep,
-//! [`lockstep`]); the loop in [`runner`] waits on one channel for keys, signals and the worker's
+//! `lockstep`); the loop in `runner` waits on one channel for keys, signals and the worker's
 //! snapshots, answers each at once and draws at most `--fps` times a second.
 
 mod compare;

@@ -2,7 +2,7 @@
 
 /// One thing that happened: a key's meaning, a mouse gesture, a resize, time passing.
 ///
-/// Keys become messages in one place ([`super::input`]); [`super::update()`] is the only code
+/// Keys become messages in one place (`input`); [`super::update()`] is the only code
 /// that changes the model.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Message {

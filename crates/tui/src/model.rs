@@ -205,7 +205,7 @@ pub struct App {
     pub sim: Run,
     /// Whether simulated time advances.
     pub running: bool,
-    /// Index into [`RATES`].
+    /// Index into the table of rates `RATES`.
     pub rate: usize,
     /// Simulated seconds owed when the cloth is stepped inline (tests; the worker keeps its own).
     pub debt: f64,
@@ -245,7 +245,7 @@ pub struct App {
     pub stats: Stats,
     /// Terminal size, cells.
     pub screen: (u16, u16),
-    /// Rendered panes, by slot (filled by [`super::panes::prepare`] before each draw).
+    /// Rendered panes, by slot (filled by `panes::prepare` before each draw).
     pub frames: [Option<AsciiFrame>; 4],
     /// The renderer's scratch buffers, reused frame to frame.
     pub renderer: Renderer,
