@@ -14,6 +14,14 @@ pub enum CheckError {
         #[source]
         source: OptionError,
     },
+    /// The run of a solver could not be started or changed (a memory check, a build).
+    #[error("the {solver} solver cannot be run: {reason}")]
+    Run {
+        /// The solver.
+        solver: String,
+        /// Why, in one sentence.
+        reason: String,
+    },
     /// A scene asked for is not bundled.
     #[error("unknown scene {name:?}; the bundled scenes are: {available}")]
     UnknownScene {
@@ -47,7 +55,7 @@ pub enum CheckError {
     #[error(transparent)]
     Render(#[from] cloth_render::RenderError),
     /// A frame of a run for frames as text failed.
-    #[error("frame {frame} of {scene} under {solver}: {source}")]
+    #[error("frame {frame} of {scene} under {solver}: {reason}")]
     Step {
         /// The scene.
         scene: String,
@@ -55,8 +63,7 @@ pub enum CheckError {
         solver: String,
         /// The frame that failed.
         frame: usize,
-        /// The solver's error.
-        #[source]
-        source: cloth_solver::SolveError,
+        /// What stopped the frame.
+        reason: String,
     },
 }

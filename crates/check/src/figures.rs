@@ -90,7 +90,9 @@ mod tests {
     use std::sync::Mutex;
     use std::sync::atomic::{AtomicUsize, Ordering};
 
-    use cloth_mesh::ClothMesh;
+    use std::sync::Arc;
+
+    use cloth_scene::Scene;
     use cloth_solver::Verlet;
     use serde_json::json;
 
@@ -98,14 +100,18 @@ mod tests {
 
     /// Verlet's reference run of a case with `params`, at [`reference_steps`].
     fn reference_run(
-        mesh: &ClothMesh,
-        colliders: &[Collider],
+        scene: &Scene,
         params: StepParams,
         nominal_ks: f64,
         retime_friction: impl Fn(&[Collider], &StepParams, &mut Vec<Collider>),
     ) -> Result<RunFigures, CheckError> {
-        let (params, colliders) = reference_params(params, colliders, nominal_ks, retime_friction);
-        measure::run(mesh, &colliders, params, &Verlet::ENTRY, &json!({}), None)
+        let (params, colliders) =
+            reference_params(params, &scene.colliders, nominal_ks, retime_friction);
+        let scene = Arc::new(Scene {
+            colliders,
+            ..scene.clone()
+        });
+        measure::run(&scene, params, &Verlet::ENTRY, &json!({}), None)
     }
 
     /// Every key of the full set of every scene: scene, switches and stiffness.
@@ -176,14 +182,9 @@ mod tests {
                                 self_collision,
                                 ..scene.params
                             };
-                            let run = reference_run(
-                                &scene.mesh,
-                                &scene.colliders,
-                                params,
-                                ks,
-                                cloth_implicit::retime_friction,
-                            )
-                            .unwrap();
+                            let run =
+                                reference_run(&scene, params, ks, cloth_implicit::retime_friction)
+                                    .unwrap();
                             let key = crate::case::figure_key(
                                 scene_name,
                                 stretch_limit,

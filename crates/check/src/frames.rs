@@ -1,6 +1,7 @@
 //! A scene's frames under a solver as text, for a solver crate's snapshot of its own frames.
 
 use std::fmt::Write as _;
+use std::sync::Arc;
 
 use cloth_render::{
     AsciiFrame, Bounds, Extent, FrameSize, Mode, RenderOptions, Renderer, View, ViewSpec,
@@ -72,12 +73,12 @@ pub fn frames_as_text(
                 .join(", "),
         });
     };
-    let loaded = cloth_scene::parse(bundled.json, bundled.name, &[])?;
+    let loaded = Arc::new(cloth_scene::parse(bundled.json, bundled.name, &[])?);
     let mut params = loaded.params;
     if !loaded.gives_steps() {
         params.steps_per_frame = entry.steps_per_frame();
     }
-    let mut stepper = Stepper::new(&loaded.mesh, &loaded.colliders, params, entry, options)?;
+    let mut stepper = Stepper::new(&loaded, params, entry, options)?;
     let mut renderer = Renderer::new();
     let render = RenderOptions {
         mode: Mode::Ascii,
@@ -94,11 +95,11 @@ pub fn frames_as_text(
     let mut done = 0;
     for &wanted in &spec.frames {
         while done < wanted {
-            stepper.frame().map_err(|source| CheckError::Step {
+            stepper.frame().map_err(|reason| CheckError::Step {
                 scene: scene.to_owned(),
                 solver: entry.name().to_owned(),
                 frame: done + 1,
-                source,
+                reason,
             })?;
             done += 1;
         }

@@ -1,8 +1,8 @@
 //! Running the cases of a check and judging each measure against its bound.
 
 use std::collections::BTreeMap;
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use cloth_mesh::StepParams;
@@ -188,7 +188,7 @@ pub fn check_each(
 }
 
 /// The bundled scenes named (all when none are), in the bundled order.
-fn load_scenes(names: &[String]) -> Result<Vec<(&'static str, Scene)>, CheckError> {
+fn load_scenes(names: &[String]) -> Result<Vec<(&'static str, Arc<Scene>)>, CheckError> {
     for name in names {
         if !bundled_names().any(|b| b == name) {
             return Err(CheckError::UnknownScene {
@@ -199,7 +199,7 @@ fn load_scenes(names: &[String]) -> Result<Vec<(&'static str, Scene)>, CheckErro
     }
     bundled_names()
         .filter(|b| names.is_empty() || names.iter().any(|n| n == b))
-        .map(|b| Ok((b, cloth_scene::load(b, &[])?)))
+        .map(|b| Ok((b, Arc::new(cloth_scene::load(b, &[])?))))
         .collect()
 }
 
@@ -213,7 +213,7 @@ const CALIBRATION: (usize, usize) = (3, 3);
 /// Times Verlet's steps on the scenes and switches of `cases`: the fastest of a few short runs
 /// from rest, at the course's steps per frame. Times are of this machine now, so they cannot be
 /// constants; the fastest run is the one least disturbed by other work.
-fn calibrate(scenes: &[(&'static str, Scene)], cases: &[Case]) -> Result<Timing, CheckError> {
+fn calibrate(scenes: &[(&'static str, Arc<Scene>)], cases: &[Case]) -> Result<Timing, CheckError> {
     let mut timing = Timing::new();
     for case in cases {
         let self_collision = match case.kind {
@@ -233,13 +233,7 @@ fn calibrate(scenes: &[(&'static str, Scene)], cases: &[Case]) -> Result<Timing,
         };
         let mut best = f64::INFINITY;
         for _ in 0..CALIBRATION.1 {
-            let mut stepper = Stepper::new(
-                &scene.mesh,
-                &scene.colliders,
-                params,
-                &Verlet::ENTRY,
-                &json!({}),
-            )?;
+            let mut stepper = Stepper::new(scene, params, &Verlet::ENTRY, &json!({}))?;
             let started = Instant::now();
             for _ in 0..CALIBRATION.0 {
                 // A calibration run from rest does not fail; if it did, its time still counts.
@@ -261,7 +255,7 @@ struct Context<'a> {
     options: &'a Value,
     check: &'a CheckOptions,
     figures: &'a Figures,
-    scenes: &'a [(&'static str, Scene)],
+    scenes: &'a [(&'static str, Arc<Scene>)],
     timing: &'a Timing,
 }
 
@@ -335,7 +329,7 @@ impl Context<'_> {
     fn run_case(
         &self,
         case: &Case,
-        scene: &Scene,
+        scene: &Arc<Scene>,
         params: StepParams,
         ks: f64,
     ) -> Result<CaseReport, CheckError> {
@@ -356,14 +350,7 @@ impl Context<'_> {
             &params,
         );
         let deadline = Instant::now() + Duration::from_secs_f64(budget);
-        let run = measure::run(
-            &scene.mesh,
-            &scene.colliders,
-            params,
-            self.entry,
-            self.options,
-            Some(deadline),
-        )?;
+        let run = measure::run(scene, params, self.entry, self.options, Some(deadline))?;
         let fps = params.frames_per_sec;
         let m = &mut report.measures;
         m.push(Measure::at_least(
@@ -430,7 +417,12 @@ impl Context<'_> {
         Ok(report)
     }
 
-    fn swap_case(&self, case: &Case, scene: &Scene, at: usize) -> Result<CaseReport, CheckError> {
+    fn swap_case(
+        &self,
+        case: &Case,
+        scene: &Arc<Scene>,
+        at: usize,
+    ) -> Result<CaseReport, CheckError> {
         let steps = self.entry.steps_per_frame();
         let mut report = Self::blank(case, steps, scene.params.ks);
         let params = StepParams {
@@ -443,15 +435,7 @@ impl Context<'_> {
             REFERENCE_STEPS_PER_FRAME,
             &params,
         );
-        match measure::swap(
-            &scene.mesh,
-            &scene.colliders,
-            params,
-            self.entry,
-            self.options,
-            steps,
-            at,
-        ) {
+        match measure::swap(scene, params, self.entry, self.options, steps, at) {
             Ok(swap) => {
                 let m = &mut report.measures;
                 let change = relative_change(swap.to, swap.verlet);
@@ -632,10 +616,9 @@ mod tests {
 
     #[test]
     fn a_run_past_its_deadline_stops_and_is_too_slow() {
-        let scene = cloth_scene::load("pinned4", &[]).unwrap();
+        let scene = Arc::new(cloth_scene::load("pinned4", &[]).unwrap());
         let run = measure::run(
-            &scene.mesh,
-            &scene.colliders,
+            &scene,
             scene.params,
             &Verlet::ENTRY,
             &json!({}),

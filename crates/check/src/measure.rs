@@ -1,8 +1,10 @@
 //! One run of a case with its figures taken frame by frame, and one swap case.
 
+use std::sync::Arc;
 use std::time::Instant;
 
-use cloth_mesh::{ClothMesh, ClothState, Collider, StepParams, Vec3};
+use cloth_mesh::{ClothMesh, ClothState, StepParams, Vec3};
+use cloth_scene::Scene;
 use cloth_solver::{SolverEntry, Verlet, max_stretch_ratio};
 use serde_json::{Value, json};
 
@@ -79,15 +81,15 @@ fn frame_speed(now: &[Vec3], before: &[Vec3], params: &StepParams) -> f64 {
 /// Runs `entry`'s solver on the scene's cloth from rest for [`RUN_SECONDS`] with `params`,
 /// taking the figures of every frame; stops at the first failed frame, or at `deadline`.
 pub(crate) fn run(
-    mesh: &ClothMesh,
-    colliders: &[Collider],
+    scene: &Arc<Scene>,
     params: StepParams,
     entry: &SolverEntry,
     options: &Value,
     deadline: Option<Instant>,
 ) -> Result<RunFigures, CheckError> {
     let started = Instant::now();
-    let mut stepper = Stepper::new(mesh, colliders, params, entry, options)?;
+    let (mesh, colliders) = (&scene.mesh, &scene.colliders);
+    let mut stepper = Stepper::new(scene, params, entry, options)?;
     let planned = frames_in(RUN_SECONDS, &params);
     let rise_from = frames_in(RISE_FROM_SECONDS, &params);
     let stretch_from = frames_in(STRETCH_FROM_SECONDS, &params);
@@ -186,8 +188,7 @@ pub(crate) struct SwapFigures {
 /// frame `at`; then the solver takes over at `steps` per frame, is handed back to Verlet after
 /// one frame, and, instead, has its steps per frame edited to `steps + 1`.
 pub(crate) fn swap(
-    mesh: &ClothMesh,
-    colliders: &[Collider],
+    scene: &Arc<Scene>,
     params: StepParams,
     entry: &SolverEntry,
     options: &Value,
@@ -195,6 +196,7 @@ pub(crate) fn swap(
     at: usize,
 ) -> Result<SwapFigures, CheckError> {
     let started = Instant::now();
+    let mesh = &scene.mesh;
     let defaults = json!({});
     let reference = Verlet::ENTRY.steps_per_frame();
     let verlet_params = StepParams {
@@ -206,7 +208,7 @@ pub(crate) fn swap(
         frame: at,
         reason: format!("{what}: {e}"),
     };
-    let mut verlet = Stepper::new(mesh, colliders, verlet_params, &Verlet::ENTRY, &defaults)?;
+    let mut verlet = Stepper::new(scene, verlet_params, &Verlet::ENTRY, &defaults)?;
     for _ in 0..at {
         verlet.frame().map_err(|e| failed("Verlet", &e))?;
     }
@@ -214,7 +216,8 @@ pub(crate) fn swap(
     verlet.frame().map_err(|e| failed("Verlet", &e))?;
     let ke_verlet = energy::kinetic(mesh, verlet.state(), verlet.params());
 
-    let mut solver = Stepper::from_state(mesh, colliders, verlet_params, entry, options, taken)?;
+    let at_frames = at as u64;
+    let mut solver = Stepper::from_state(scene, verlet_params, entry, options, taken, at_frames)?;
     solver.swap(entry, options, steps)?;
     solver
         .frame()
@@ -228,19 +231,20 @@ pub(crate) fn swap(
     let ke_solver = energy::kinetic(mesh, solver.state(), solver.params());
 
     let mut back = Stepper::from_state(
-        mesh,
-        colliders,
+        scene,
         solver_params,
         entry,
         options,
         handed.clone(),
+        at_frames + 1,
     )?;
     back.swap(&Verlet::ENTRY, &defaults, reference)?;
     back.frame().map_err(|e| failed("Verlet taking back", &e))?;
     let ke_back = energy::kinetic(mesh, back.state(), back.params());
 
-    let mut edited = Stepper::from_state(mesh, colliders, solver_params, entry, options, handed)?;
-    edited.set_steps(steps + 1);
+    let mut edited =
+        Stepper::from_state(scene, solver_params, entry, options, handed, at_frames + 1)?;
+    edited.set_steps(steps + 1)?;
     edited
         .frame()
         .map_err(|e| failed("the solver after the edit", &e))?;

@@ -34,6 +34,19 @@ pub struct Choice {
 }
 
 impl Choice {
+    /// The registered solver `name` with `options`, checked against its entry.
+    ///
+    /// # Errors
+    /// When `name` is not registered or its entry refuses `options`.
+    pub fn checked(registry: &Registry, name: &str, options: &Value) -> anyhow::Result<Self> {
+        let entry = *registry.get(name)?;
+        entry.check(options)?;
+        Ok(Self {
+            entry,
+            options: options.clone(),
+        })
+    }
+
     /// Builds the solver for `mesh`.
     ///
     /// # Errors
