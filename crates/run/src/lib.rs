@@ -5,7 +5,9 @@
 //! [`Run`] is one cloth (scene, state, solver, guard, stats, clock): it steps a frame, applies
 //! an edit of the live settings and swaps a solver, rescaling the previous positions whenever
 //! the step changes (the one place that does, through [`cloth_mesh::ClothState::retime`]).
-//! [`study`] runs several in lockstep. Beside it live what a run leaves behind: [`export`]
+//! [`lockstep`] steps one or several against the wall clock on a thread of their own (the
+//! live UI's single cloth and its compare mode alike), and [`study`] runs several to the end
+//! through the same lockstep. Beside it live what a run leaves behind: [`export`]
 //! (meshes, animations, tables, recordings), [`state_file`] (a state to carry on from),
 //! [`output`] (standard output and atomic files) and [`memory`] (what a cloth needs).
 //!
@@ -14,6 +16,7 @@
 pub mod export;
 pub mod guard;
 pub mod headless;
+pub mod lockstep;
 pub mod memory;
 pub mod output;
 pub mod progress;

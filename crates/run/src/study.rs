@@ -308,19 +308,19 @@ impl<'a> Run<'a> {
         self.diverged.is_some() || self.failed.is_some()
     }
 
-    /// Steps frame `frame` of `frames`, unless stopped; a divergence or a failed step stops
-    /// the run at the last good state.
-    fn advance(&mut self, frame: u64, frames: u64) {
+    /// Takes in how frame `frame` of `frames` went, once stepped: a divergence or a failed
+    /// step stops the run at the last good state.
+    fn settle(&mut self, frame: u64, frames: u64) {
         if self.stopped() {
             return;
         }
-        match self.inner.step_frame().map_err(|f| *f) {
-            Ok(()) => self.frames = frame,
-            Err(crate::Fault {
+        match self.inner.fault.clone() {
+            None => self.frames = frame,
+            Some(crate::Fault {
                 cause: crate::Cause::Diverged(d),
                 ..
             }) => self.diverged = Some((frame, d)),
-            Err(fault) => {
+            Some(fault) => {
                 let scene = &self.variant.scene;
                 let e = headless::fault_error(
                     scene,
@@ -378,9 +378,9 @@ pub fn summarise(variant: &Variant, state: &ClothState, diverged: Option<String>
     }
 }
 
-/// Steps every run that has not stopped through frame `frame` of `frames`, on up to
-/// `threads` threads (each thread a contiguous share of the runs), then counts the steps
-/// on `progress`.
+/// Steps every run that has not stopped through frame `frame` of `frames` in lockstep, on up
+/// to `threads` threads (see [`crate::lockstep::advance`], the live UI's), then counts the
+/// steps on `progress`.
 pub fn advance_all(
     runs: &mut [Run<'_>],
     frame: u64,
@@ -388,22 +388,13 @@ pub fn advance_all(
     threads: usize,
     progress: &mut Progress,
 ) {
-    let threads = threads.clamp(1, runs.len().max(1));
-    if threads == 1 {
-        for run in runs.iter_mut() {
-            run.advance(frame, frames);
-        }
-    } else {
-        let share = runs.len().div_ceil(threads);
-        std::thread::scope(|s| {
-            for chunk in runs.chunks_mut(share) {
-                s.spawn(move || {
-                    for run in chunk {
-                        run.advance(frame, frames);
-                    }
-                });
-            }
-        });
+    let mut live: Vec<&mut crate::Run> = (runs.iter_mut())
+        .filter(|r| !r.stopped())
+        .map(|r| &mut r.inner)
+        .collect();
+    crate::lockstep::advance(&mut live, frame, threads, &|_| false);
+    for run in runs.iter_mut() {
+        run.settle(frame, frames);
     }
     for run in runs.iter() {
         for _ in 0..run.variant.scene.params.steps_per_frame {

@@ -11,10 +11,9 @@
 use cloth_mesh::StepParams;
 use cloth_render::AsciiFrame;
 
-use super::lockstep::{self, Lockstep};
 use super::model::App;
-use super::worker::Adopted;
 use cloth_run::Settings;
+use cloth_run::lockstep::{self, Adopted, Lockstep};
 use cloth_run::{Command, Run};
 
 /// A variant other than the first.
@@ -181,8 +180,7 @@ impl App {
         if sims.iter().all(|s| s.fault.is_some()) {
             return false;
         }
-        let never = std::sync::atomic::AtomicBool::new(false);
         let threads = cloth_run::study::threads_for(sims.len());
-        lockstep::advance(&mut sims, frame + 1, threads, &never)
+        lockstep::advance(&mut sims, frame + 1, threads, &|_| false)
     }
 }

@@ -5,17 +5,16 @@
 //! changes the model, and a pure [`view()`]. Terminal events become messages in `input`
 //! (after `escape` joins split escape sequences); the one `keymap::KEYMAP` dispatches keys
 //! and generates the footer and the help; the one `params::PARAMS` table drives the
-//! parameter panel. The cloth steps on its own thread (`worker`), which owns the simulation
-//! clock (compare mode's variants on one coordinator that steps them in lockstep,
-//! `lockstep`); the loop in `runner` waits on one channel for keys, signals and the worker's
-//! snapshots, answers each at once and draws at most `--fps` times a second.
+//! parameter panel. The cloth steps on its own thread, a `cloth_run::lockstep::Lockstep` of
+//! one that owns the simulation clock (compare mode's variants on one lockstep of them all);
+//! the loop in `runner` waits on one channel for keys, signals and the lockstep's snapshots,
+//! answers each at once and draws at most `--fps` times a second.
 
 mod compare;
 mod escape;
 mod input;
 mod keymap;
 mod layout;
-mod lockstep;
 mod message;
 mod model;
 mod panes;
@@ -27,7 +26,6 @@ mod terminal;
 mod theme;
 mod update;
 mod view;
-mod worker;
 
 #[cfg(test)]
 mod tests;

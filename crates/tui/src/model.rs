@@ -4,9 +4,8 @@ use std::path::PathBuf;
 
 use cloth_render::{AsciiFrame, Bounds, ColorDepth, Mode, Orbit, Renderer, View};
 
-use super::lockstep::Lockstep;
-use super::worker::{Rates, Worker};
 use cloth_run::Settings;
+use cloth_run::lockstep::{Lockstep, Rates};
 use cloth_run::{Command, Run};
 
 /// How many panes show the cloth.
@@ -270,7 +269,7 @@ pub struct App {
     /// How a worker tells the loop it has something new (set by the loop; `None` in tests).
     pub notify: Option<Notify>,
     /// The thread stepping the cloth; `None` steps it inline (tests, and the fallback).
-    pub worker: Option<Worker>,
+    pub worker: Option<Lockstep>,
     /// What the worker was last told, so an edit is sent once.
     pub sent: (Settings, &'static str),
     /// Scenes the picker offers to open a file from, and where save writes by default.
@@ -401,10 +400,11 @@ impl App {
                 m.sim.release_solver();
             }
         } else {
-            self.worker = Some(Worker::spawn(
-                Self::stepping_copy(&self.sim)?,
+            self.worker = Some(Lockstep::spawn(
+                vec![Self::stepping_copy(&self.sim)?],
                 self.running,
                 self.rate(),
+                1,
                 Box::new(move || n()),
             )?);
         }

@@ -362,7 +362,7 @@ fn toggle_pause(app: &mut App) {
     }
     app.running = !app.running;
     app.debt = 0.0;
-    app.stats.rates = super::worker::Rates::default();
+    app.stats.rates = cloth_run::lockstep::Rates::default();
     send_run(app);
     app.say(
         Level::Info,
@@ -514,7 +514,7 @@ pub fn adopt(app: &mut App) -> bool {
     let Some(w) = &app.worker else {
         return false;
     };
-    let Some(got) = w.adopt_into(&mut app.sim) else {
+    let Some(got) = w.adopt_into(&mut [&mut app.sim]) else {
         return false;
     };
     app.stats.rates = got.rates;
@@ -1193,7 +1193,7 @@ fn start_scene(app: &mut App, scene: cloth_scene::Scene) {
             app.extent = None;
             app.debt = 0.0;
             app.frames = [None, None, None, None];
-            app.stats.rates = super::worker::Rates::default();
+            app.stats.rates = cloth_run::lockstep::Rates::default();
             if let Some(notify) = app.notify.clone()
                 && let Err(e) = app.start_worker(notify)
             {
