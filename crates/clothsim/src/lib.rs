@@ -63,6 +63,7 @@ where
             || cli::PROGRAM.to_owned(),
             |s| s.to_string_lossy().into_owned(),
         );
+    cloth_run::headless::set_program_name(&program);
     let cli = match cli::parse(registry, &program, args) {
         Ok(cli) => cli,
         Err(e) => return clap_exit(&program, &e),

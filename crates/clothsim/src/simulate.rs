@@ -312,7 +312,8 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         let written = output::write_atomic(path, &bytes)?;
         if let Some(note) = written.note() {
             // Nowhere else to say it; a lost note does not change the result.
-            let _ = writeln!(std::io::stderr(), "clothsim: note: {note}");
+            let program = cloth_run::headless::program_name();
+            let _ = writeln!(std::io::stderr(), "{program}: note: {note}");
         }
         Ok(())
     } else {
@@ -411,7 +412,8 @@ fn run_study(args: &Args, registry: &Registry, format: &Format) -> anyhow::Resul
     }
     for note in notes {
         // Nowhere else to say it; a lost note does not change the result.
-        let _ = writeln!(std::io::stderr(), "clothsim: note: {note}");
+        let program = cloth_run::headless::program_name();
+        let _ = writeln!(std::io::stderr(), "{program}: note: {note}");
     }
 
     let summaries: Vec<study::Summary> = runs.iter().map(study::Run::summary).collect();

@@ -45,6 +45,21 @@ pub fn frame_error(
     }
 }
 
+/// The running binary's name, which starts every line this crate writes to stderr (progress,
+/// notes): `clothsim` until [`set_program_name`] names a plug-in binary.
+static PROGRAM: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+
+/// Names the running binary in the lines written to stderr; the first name set stays.
+pub fn set_program_name(name: &str) {
+    let _ = PROGRAM.set(name.to_owned());
+}
+
+/// The running binary's name (see [`set_program_name`]).
+#[must_use]
+pub fn program_name() -> &'static str {
+    PROGRAM.get().map_or("clothsim", String::as_str)
+}
+
 /// Says on stderr that a bare scene name was read as the bundled scene although a file of that
 /// name is in the current folder.
 pub fn note_shadowing(name: &str) {
@@ -52,7 +67,8 @@ pub fn note_shadowing(name: &str) {
         use std::io::Write as _;
         let _ = writeln!(
             std::io::stderr(),
-            "clothsim: note: read the bundled scene {name}; for the file of that name, write {file}"
+            "{}: note: read the bundled scene {name}; for the file of that name, write {file}",
+            program_name()
         );
     }
 }

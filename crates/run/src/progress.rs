@@ -161,7 +161,8 @@ impl Lines {
             String::new()
         };
         Some(format!(
-            "clothsim: {}: frame {} of {} ({:.0} %), {} elapsed{left}",
+            "{}: {}: frame {} of {} ({:.0} %), {} elapsed{left}",
+            crate::headless::program_name(),
             self.label,
             (done / self.steps_per_frame).min(self.frames),
             self.frames,
@@ -173,7 +174,8 @@ impl Lines {
     /// The closing line after `done` steps at `now`.
     fn last(&self, done: u64, now: Instant) -> String {
         format!(
-            "clothsim: {}: {} of {} frames simulated in {}",
+            "{}: {}: {} of {} frames simulated in {}",
+            crate::headless::program_name(),
             self.label,
             done / self.steps_per_frame,
             self.frames,

@@ -140,3 +140,28 @@ fn zsh_and_fish_complete_the_plug_in_binary() {
     assert!(fish.contains("complete -c clothsim-xpbd "), "{fish}");
     assert!(!fish.contains("complete -c clothsim "), "{fish}");
 }
+
+#[test]
+fn the_lines_a_run_writes_to_stderr_name_the_plug_in_binary() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let out = dir.path().join("state.json");
+    let o = xpbd(&[
+        "simulate",
+        "pinned4",
+        "--solver",
+        "verlet",
+        "--frames",
+        "2",
+        "--progress",
+        "always",
+        "--out",
+        out.to_str().expect("a UTF-8 path"),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.starts_with("clothsim-xpbd: pinned4: 2 of 2 frames simulated"),
+        "{stderr}"
+    );
+    assert!(!names_clothsim_alone(&stderr), "{stderr}");
+}
