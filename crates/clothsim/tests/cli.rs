@@ -1028,7 +1028,7 @@ fn options_are_never_dropped_silently() {
     ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(
-        stderr(&o).contains("simulation.solver_options.bogus (1) is an option of the scene's solver verlet, but --solver fast-implicit has no bogus option"),
+        stderr(&o).contains("simulation.solver_options.bogus (1) is given for the scene's solver verlet, but --solver fast-implicit has no bogus option"),
         "{}",
         stderr(&o)
     );

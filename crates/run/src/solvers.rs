@@ -184,7 +184,7 @@ pub fn prepare(
         for (key, value) in &scene.solver_options {
             if entry.option(key).is_none() {
                 anyhow::bail!(
-                    "{}: simulation.solver_options.{key} ({value}) is an option of the scene's \
+                    "{}: simulation.solver_options.{key} ({value}) is given for the scene's \
                      solver {own}, but --solver {} has no {key} option; remove it from the \
                      scene, or run {own}",
                     scene.origin,
@@ -344,7 +344,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.starts_with("pinned4: simulation.solver_options.bogus (1) is an option of the scene's solver verlet, but --solver fast-implicit has no bogus option"),
+            e.starts_with("pinned4: simulation.solver_options.bogus (1) is given for the scene's solver verlet, but --solver fast-implicit has no bogus option"),
             "{e}"
         );
         // An option both have passes on, and is checked by the chosen solver.
