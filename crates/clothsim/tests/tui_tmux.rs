@@ -432,9 +432,9 @@ fn the_stretch_limit_off_experiment_is_not_stopped() {
         return;
     };
     t.clothsim("tui pinned4 --paused");
-    // Up from the first row wraps to the last (the default solver's option rows, threads and
-    // order), then the solver row: one more is the stretch limit.
-    t.keys(&["k", "k", "k", "k", "Right"]);
+    // Up from the first row wraps to the last (the four wind rows, the default solver's
+    // option rows, threads and order), then the solver row: one more is the stretch limit.
+    t.keys(&["k", "k", "k", "k", "k", "k", "k", "k", "Right"]);
     t.wait_for("the stretch limit off", ANSWER, |s| {
         s.contains("stretch limit = off")
     });

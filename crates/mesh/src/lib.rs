@@ -18,6 +18,7 @@ mod normals;
 mod params;
 mod rng;
 mod state;
+mod wind;
 
 pub use collider::{Collider, Plane, SURFACE_OFFSET, Sphere, apply_colliders};
 pub use grid::{
@@ -27,6 +28,7 @@ pub use normals::vertex_normals;
 pub use params::{MAX_STRETCH, ParamError, REFERENCE_STEPS_PER_FRAME, StepParams};
 pub use rng::SplitMix64;
 pub use state::ClothState;
+pub use wind::{AIR_DENSITY, Wind, apply_wind, wind_forces};
 
 /// A 3-vector of `f64` in SI units (metres, metres per second, newtons...).
 pub type Vec3 = nalgebra::Vector3<f64>;

@@ -1,6 +1,6 @@
 //! The live-editable parameters of a run.
 
-use crate::{SpringKind, Vec3};
+use crate::{SpringKind, Vec3, Wind};
 
 /// Every parameter that may change between two steps, in one `Copy` struct (rapier's
 /// `IntegrationParameters`). Defaults are the course's.
@@ -39,6 +39,8 @@ pub struct StepParams {
     pub self_collision: bool,
     /// Whether the 10 % maximum-stretch constraint applies (default true, the course's model).
     pub stretch_limit: bool,
+    /// Wind (default none): applied by the run before each step, so every solver feels it.
+    pub wind: Wind,
 }
 
 impl Default for StepParams {
@@ -55,6 +57,7 @@ impl Default for StepParams {
             frames_per_sec: 90.0,
             self_collision: true,
             stretch_limit: true,
+            wind: Wind::default(),
         }
     }
 }
@@ -158,6 +161,35 @@ impl StepParams {
                 "gravity",
                 format!("{:?}", self.gravity.as_slice()),
                 "three finite numbers (m/s^2)",
+            );
+        }
+        let w = &self.wind;
+        if !w
+            .velocity
+            .iter()
+            .all(|v| v.is_finite() && v.abs() <= 1000.0)
+        {
+            return bad(
+                "wind",
+                format!("{:?}", w.velocity.as_slice()),
+                "three numbers from -1000 to 1000 (m/s)",
+            );
+        }
+        if !(w.drag.is_finite() && (0.0..=100.0).contains(&w.drag)) {
+            return bad("wind_drag", w.drag.to_string(), "from 0 to 100");
+        }
+        if !(w.gust.is_finite() && (0.0..=10.0).contains(&w.gust)) {
+            return bad(
+                "wind_gust",
+                w.gust.to_string(),
+                "from 0 to 10 (of the wind)",
+            );
+        }
+        if !(w.gust_period.is_finite() && w.gust_period >= 0.01 && w.gust_period <= 1.0e6) {
+            return bad(
+                "wind_gust_period",
+                w.gust_period.to_string(),
+                "from 0.01 to 1000000 (s)",
             );
         }
         if self.steps_per_frame == 0 || self.steps_per_frame > 10_000 {

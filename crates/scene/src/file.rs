@@ -141,6 +141,23 @@ pub struct SimulationBlock {
     /// that replaced it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub constraint_order: Option<serde_json::Value>,
+    /// The air's velocity, m/s (default none): each triangle feels the drag of the relative
+    /// velocity's normal component (docs/model.md).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "optional_xyz"
+    )]
+    pub wind: Option<[f64; 3]>,
+    /// The cloth's drag coefficient across the flow (default 1.2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wind_drag: Option<f64>,
+    /// The gust's amplitude, a fraction of the wind (default 0: steady).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wind_gust: Option<f64>,
+    /// The gust's period, s (default 2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wind_gust_period: Option<f64>,
     /// Seed of the vertical cloth's z-jitter (default 184).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,

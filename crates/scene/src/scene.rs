@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use cloth_mesh::{
-    ClothMesh, Collider, GridSpec, MeshError, Orientation, Plane, Sphere, StepParams, Vec3,
+    ClothMesh, Collider, GridSpec, MeshError, Orientation, Plane, Sphere, StepParams, Vec3, Wind,
 };
 use serde_json::{Map, Value};
 
@@ -118,6 +118,16 @@ impl Scene {
         sim.stretch_limit = (params.stretch_limit != defaults.stretch_limit
             || sim.stretch_limit.is_some())
         .then_some(params.stretch_limit);
+        let (w, d) = (params.wind, defaults.wind);
+        sim.wind = (w.velocity != d.velocity || sim.wind.is_some()).then_some([
+            w.velocity.x,
+            w.velocity.y,
+            w.velocity.z,
+        ]);
+        sim.wind_drag = (w.drag != d.drag || sim.wind_drag.is_some()).then_some(w.drag);
+        sim.wind_gust = (w.gust != d.gust || sim.wind_gust.is_some()).then_some(w.gust);
+        sim.wind_gust_period = (w.gust_period != d.gust_period || sim.wind_gust_period.is_some())
+            .then_some(w.gust_period);
         sim.solver = Some(solver.to_owned());
         let options = options.as_object().cloned().unwrap_or_default();
         sim.solver_options = (!options.is_empty()).then_some(options);
@@ -392,6 +402,10 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         iterations,
         threads,
         constraint_order,
+        wind,
+        wind_drag,
+        wind_gust,
+        wind_gust_period,
         seed,
     } = sim;
     for ((key, option), given) in
@@ -437,6 +451,55 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         Some(g) => ck.vec3("simulation.gravity", g)?,
         None => defaults.gravity,
     };
+    let wind = {
+        let d = defaults.wind;
+        let velocity = match wind {
+            Some(w) => {
+                let v = ck.vec3("simulation.wind", w)?;
+                if v.iter().any(|c| c.abs() > 1000.0) {
+                    return Err(ck.fail(
+                        "simulation.wind",
+                        show3(w),
+                        "three numbers from -1000 to 1000 (m/s)",
+                    ));
+                }
+                v
+            }
+            None => d.velocity,
+        };
+        let number = |key: &str, v: Option<f64>, default: f64, lo: f64, hi: f64, allowed: &str| {
+            v.map_or(Ok(default), |v| {
+                ck.range(key, v, |v| (lo..=hi).contains(&v), allowed)
+            })
+        };
+        Wind {
+            velocity,
+            drag: number(
+                "simulation.wind_drag",
+                wind_drag,
+                d.drag,
+                0.0,
+                100.0,
+                "from 0 to 100",
+            )?,
+            gust: number(
+                "simulation.wind_gust",
+                wind_gust,
+                d.gust,
+                0.0,
+                10.0,
+                "from 0 to 10 (a fraction of the wind)",
+            )?,
+            gust_period: number(
+                "simulation.wind_gust_period",
+                wind_gust_period,
+                d.gust_period,
+                0.01,
+                1.0e6,
+                "from 0.01 to 1000000 (s)",
+            )?,
+        }
+    };
     let params = StepParams {
         ks: c.ks,
         density: c.density,
@@ -449,6 +512,7 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         frames_per_sec,
         self_collision: self_collision.unwrap_or(defaults.self_collision),
         stretch_limit: stretch_limit.unwrap_or(defaults.stretch_limit),
+        wind,
     };
 
     let mut colliders = Vec::new();

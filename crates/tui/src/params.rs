@@ -124,6 +124,61 @@ const GRAVITY: Kind = Kind::Number {
     decimals: 2,
 };
 
+const WIND: Kind = Kind::Number {
+    min: -1000.0,
+    max: 1000.0,
+    fine: 0.5,
+    coarse: 5.0,
+    scale: Scale::Linear,
+    integer: false,
+    decimals: 1,
+};
+
+/// The wind's rows, after the solver's options: clothsim's addition to the course's model,
+/// kept below the rows a small terminal must show.
+pub const WIND_PARAMS: &[Param] = &[
+    Param {
+        label: "wind x",
+        unit: "m/s",
+        help: "the air's velocity, x component: each triangle feels drag across it",
+        kind: WIND,
+        get: |s| Some(s.params.wind.velocity.x),
+        set: |s, v| s.params.wind.velocity.x = v,
+    },
+    Param {
+        label: "wind y",
+        unit: "m/s",
+        help: "the air's velocity, y component (up is +y)",
+        kind: WIND,
+        get: |s| Some(s.params.wind.velocity.y),
+        set: |s, v| s.params.wind.velocity.y = v,
+    },
+    Param {
+        label: "wind z",
+        unit: "m/s",
+        help: "the air's velocity, z component",
+        kind: WIND,
+        get: |s| Some(s.params.wind.velocity.z),
+        set: |s, v| s.params.wind.velocity.z = v,
+    },
+    Param {
+        label: "wind drag",
+        unit: "",
+        help: "the cloth's drag coefficient across the flow (1.2: a flat plate)",
+        kind: Kind::Number {
+            min: 0.0,
+            max: 100.0,
+            fine: 0.1,
+            coarse: 1.0,
+            scale: Scale::Linear,
+            integer: false,
+            decimals: 2,
+        },
+        get: |s| Some(s.params.wind.drag),
+        set: |s, v| s.params.wind.drag = v,
+    },
+];
+
 const FRICTION: Kind = Kind::Number {
     min: 0.0,
     max: 1.0,
@@ -377,25 +432,28 @@ fn option_rows(entry: &SolverEntry) -> impl Iterator<Item = Param> + '_ {
         })
 }
 
-/// How many rows the panel has for `sim`: [`PARAMS`] and the active solver's options.
+/// How many rows the panel has for `sim`: [`PARAMS`], the active solver's options and
+/// [`WIND_PARAMS`].
 pub fn row_count(sim: &Run) -> usize {
-    PARAMS.len() + option_rows(sim.entry()).count()
+    PARAMS.len() + option_rows(sim.entry()).count() + WIND_PARAMS.len()
 }
 
 /// Row `i` of the panel for `sim` (the last row for an `i` past the end).
 pub fn row(sim: &Run, i: usize) -> Param {
     let i = i.min(row_count(sim) - 1);
+    let options = option_rows(sim.entry()).count();
     match i.checked_sub(PARAMS.len()) {
         None => PARAMS[i],
-        Some(k) => option_rows(sim.entry())
+        Some(k) if k < options => option_rows(sim.entry())
             .nth(k)
             .unwrap_or(PARAMS[PARAMS.len() - 1]),
+        Some(k) => WIND_PARAMS[k - options],
     }
 }
 
 /// Whether row `i` is one of the solver's options (changing it rebuilds the solver).
-pub fn is_option_row(i: usize) -> bool {
-    i >= PARAMS.len()
+pub fn is_option_row(sim: &Run, i: usize) -> bool {
+    (PARAMS.len()..PARAMS.len() + option_rows(sim.entry()).count()).contains(&i)
 }
 
 impl Param {

@@ -71,12 +71,12 @@ fn type_text(app: &mut App, text: &str) {
     }
 }
 
-fn row(label: &str) -> usize {
-    PARAMS.iter().position(|p| p.label == label).unwrap()
-}
-
 fn select(app: &mut App, label: &str) {
-    while app.selected != row(label) {
+    let count = super::params::row_count(&app.sim);
+    let at = (0..count)
+        .position(|i| super::params::row(&app.sim, i).label == label)
+        .unwrap_or_else(|| panic!("no row {label}"));
+    while app.selected != at {
         press(app, KeyCode::Down);
     }
 }
@@ -507,6 +507,32 @@ fn a_diverging_run_pauses_shows_the_last_good_frame_and_resets() {
 }
 
 #[test]
+fn a_wind_row_edits_the_live_wind_and_the_run_feels_it() {
+    let mut app = app_with("curtain", true);
+    select(&mut app, "wind z");
+    for _ in 0..4 {
+        press(&mut app, KeyCode::Right);
+    }
+    assert_eq!(
+        app.sim.settings.params.wind.velocity.z, 2.0,
+        "four steps of 0.5 m/s"
+    );
+    let mut calm = app_with("curtain", true);
+    for _ in 0..5 {
+        app.sim.step_frame().unwrap();
+        calm.sim.step_frame().unwrap();
+    }
+    let pushed: f64 = (app.sim.state.positions.iter())
+        .zip(&calm.sim.state.positions)
+        .map(|(a, b)| a.z - b.z)
+        .sum();
+    assert!(
+        pushed > 0.0,
+        "the cloth moves with the air along +z ({pushed} m summed)"
+    );
+}
+
+#[test]
 fn the_solver_row_cycles_through_the_registry_and_shows_the_new_solvers_options() {
     let mut app = app_with("pinned4", true);
     let names: Vec<&str> = app.sim.registry().names().collect();
@@ -515,9 +541,15 @@ fn the_solver_row_cycles_through_the_registry_and_shows_the_new_solvers_options(
     for expected in names.iter().cycle().skip(1).take(names.len()) {
         press(&mut app, KeyCode::Right);
         assert_eq!(app.sim.entry().name(), *expected);
-        // One row per option of the active solver, after the fixed rows.
+        // One row per option of the active solver, after the fixed rows, then the wind's.
         let options = app.sim.entry().options().len();
-        assert_eq!(super::params::row_count(&app.sim), PARAMS.len() + options);
+        let wind = super::params::WIND_PARAMS.len();
+        assert_eq!(
+            super::params::row_count(&app.sim),
+            PARAMS.len() + options + wind
+        );
+        let first_wind = super::params::row(&app.sim, PARAMS.len() + options);
+        assert_eq!(first_wind.label, "wind x");
         assert_eq!(app.sim.settings.options.len(), options);
     }
 }

@@ -665,7 +665,7 @@ fn absent(label: &str) -> String {
 /// After a parameter changed: say its new value, or warn.
 fn changed(app: &mut App, at: usize) {
     let p = row(&app.sim, at);
-    if is_option_row(at)
+    if is_option_row(&app.sim, at)
         && let Err(e) = app.sim.apply_options()
     {
         app.say(Level::Warn, format!("{e:#}"));

@@ -368,3 +368,57 @@ fn the_steps_are_given_by_the_file_or_a_set_only() {
             .gives_steps()
     );
 }
+
+#[test]
+fn the_wind_keys_read_into_the_parameters_and_are_checked_by_name() {
+    let s = load(
+        "curtain",
+        &[
+            "simulation.wind=[1,0,-3]".to_owned(),
+            "simulation.wind_drag=0.8".to_owned(),
+            "simulation.wind_gust=0.5".to_owned(),
+            "simulation.wind_gust_period=4".to_owned(),
+        ],
+    )
+    .unwrap();
+    let w = s.params.wind;
+    assert_eq!(w.velocity, Vec3::new(1.0, 0.0, -3.0));
+    assert_eq!((w.drag, w.gust, w.gust_period), (0.8, 0.5, 4.0));
+    assert!(s.params.validate().is_ok());
+    assert!(
+        !load("curtain", &[]).unwrap().params.wind.blows(),
+        "none by default"
+    );
+
+    let e = err(&["simulation.wind=[0,0,2000]"]);
+    assert!(
+        e.contains("simulation.wind") && e.contains("-1000 to 1000"),
+        "{e}"
+    );
+    let e = err(&["simulation.wind=[0,1]"]);
+    assert!(e.contains("simulation.wind"), "{e}");
+    let e = err(&["simulation.wind_drag=-1"]);
+    assert!(
+        e.contains("simulation.wind_drag") && e.contains("from 0 to 100"),
+        "{e}"
+    );
+    let e = err(&["simulation.wind_gust_period=0"]);
+    assert!(e.contains("simulation.wind_gust_period"), "{e}");
+}
+
+#[test]
+fn a_saved_scene_keeps_its_wind_and_a_calm_one_gains_no_wind_keys() {
+    let s = load("curtain", &["simulation.wind=[0,0,5]".to_owned()]).unwrap();
+    let file = s.to_file(&s.params, &s.colliders, "verlet", &serde_json::json!({}));
+    let sim = file.simulation.unwrap();
+    assert_eq!(sim.wind, Some([0.0, 0.0, 5.0]));
+    assert_eq!(sim.wind_drag, None, "the default drag is not written");
+    let calm = load("curtain", &[]).unwrap();
+    let file = calm.to_file(
+        &calm.params,
+        &calm.colliders,
+        "verlet",
+        &serde_json::json!({}),
+    );
+    assert_eq!(file.simulation.unwrap().wind, None);
+}

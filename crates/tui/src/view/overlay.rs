@@ -300,7 +300,7 @@ pub fn discard(app: &App, f: &mut Frame, area: Rect, then: Then, theme: &Theme) 
         .map(|i| (i, row(&app.sim, i)))
         .filter(|(i, p)| match p.kind {
             Kind::Solver => !same_solver,
-            _ if is_option_row(*i) && !same_solver => false,
+            _ if is_option_row(&app.sim, *i) && !same_solver => false,
             _ => (p.get)(&app.sim.settings) != (p.get)(&app.saved.0),
         })
         .map(|(_, p)| p.label)
