@@ -26,5 +26,7 @@ pub mod state_file;
 pub mod study;
 
 pub use cloth_solver::{Registry, SolverEntry};
-pub use run::{Cause, Command, Fault, HISTORY, Run, Sample, Settings, numeric_options};
+pub use run::{
+    Cause, Command, Fault, HISTORY, Held, Run, Sample, Settings, Touch, numeric_options,
+};
 pub use solvers::default_registry;

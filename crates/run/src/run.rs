@@ -8,7 +8,7 @@
 use std::collections::VecDeque;
 use std::sync::Arc;
 
-use cloth_mesh::ClothState;
+use cloth_mesh::{ClothState, Vec3};
 use cloth_scene::Scene;
 use cloth_solver::{OptionKind, Registry, SolveError, Solver, SolverEntry, StepParams};
 use serde_json::Value;
@@ -82,6 +82,45 @@ pub enum Command {
     StepFrame,
     /// Go on after a stop, with the runaway test off until the next reset.
     ResumeAnyway,
+    /// A touch of the cloth by hand.
+    Touch(Touch),
+}
+
+/// A touch of the cloth by hand, applied by the run between its steps so that every solver of
+/// the registry feels it without knowing of it: what the live UI's mouse and keys and a
+/// headless `--actions` script do.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Touch {
+    /// Take point `point` and carry it to `to` (m) over the next frame, then hold it there.
+    Grab {
+        /// The point's index.
+        point: usize,
+        /// Where the hand holds it, m.
+        to: Vec3,
+    },
+    /// Move the hand holding a point to `to` (m): the point follows over the next frame.
+    Drag {
+        /// Where the hand holds it, m.
+        to: Vec3,
+    },
+    /// Let the held point go, with the velocity the hand gave it.
+    Release,
+    /// Add `velocity` (m/s) to point `point`'s velocity at once (a pinned point stays put).
+    Poke {
+        /// The point's index.
+        point: usize,
+        /// The velocity added, m/s.
+        velocity: Vec3,
+    },
+}
+
+/// A point held by the hand and where the hand is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Held {
+    /// The point's index.
+    pub point: usize,
+    /// Where the hand holds it, m.
+    pub to: Vec3,
 }
 
 /// Everything the live settings hold: the step parameters, the collision objects (whose
@@ -134,6 +173,8 @@ pub struct Run {
     pub peak_kinetic: f64,
     /// Set when the run diverged or exploded; cleared by a reset.
     pub fault: Option<Fault>,
+    /// The point the hand holds, if any.
+    pub held: Option<Held>,
     guard: Guard,
     /// Whether the divergence guard judges each frame (see [`Run::set_guarded`]).
     guarded: bool,
@@ -199,6 +240,7 @@ impl Run {
             generation: 0,
             peak_kinetic: 0.0,
             fault: None,
+            held: None,
             guard: Guard::new(),
             guarded: true,
             recording: true,
@@ -398,6 +440,7 @@ impl Run {
 
     /// Back to the start positions at rest, keeping the live settings (the course's R key).
     pub fn reset(&mut self) {
+        self.held = None;
         self.state.reset(&self.scene.mesh);
         self.last_good.clone_from(&self.state);
         if let Some(s) = &mut self.solver {
@@ -460,7 +503,61 @@ impl Run {
             }
             Command::StepFrame => self.step_frame().map_err(|f| f.what),
             Command::ResumeAnyway => self.resume_anyway(),
+            Command::Touch(touch) => self.touch(touch),
         }
+    }
+
+    /// Applies a touch of the cloth (see [`Touch`]).
+    ///
+    /// # Errors
+    /// A point that the cloth does not have, a position or velocity that is not finite, or a
+    /// drag with no point held; nothing changes.
+    pub fn touch(&mut self, touch: Touch) -> Result<(), String> {
+        let points = self.scene.mesh.len();
+        let point_ok = |point: usize| {
+            if point < points {
+                Ok(())
+            } else {
+                Err(format!(
+                    "point {point} is not on the cloth: its points are 0 to {}",
+                    points - 1
+                ))
+            }
+        };
+        let finite = |what: &str, v: &Vec3| {
+            if v.iter().all(|c| c.is_finite()) {
+                Ok(())
+            } else {
+                Err(format!(
+                    "the {what} {:?} is not three finite numbers",
+                    v.as_slice()
+                ))
+            }
+        };
+        match touch {
+            Touch::Grab { point, to } => {
+                point_ok(point)?;
+                finite("position", &to)?;
+                self.held = Some(Held { point, to });
+            }
+            Touch::Drag { to } => {
+                finite("position", &to)?;
+                let Some(held) = &mut self.held else {
+                    return Err("no point is held: grab one first".to_owned());
+                };
+                held.to = to;
+            }
+            Touch::Release => self.held = None,
+            Touch::Poke { point, velocity } => {
+                point_ok(point)?;
+                finite("velocity", &velocity)?;
+                let dt = self.dt();
+                if !self.scene.mesh.pinned()[point] {
+                    self.state.last[point] -= velocity * dt;
+                }
+            }
+        }
+        Ok(())
     }
 
     /// One step of `dt`. On failure the state goes back to the last good frame and
@@ -497,12 +594,22 @@ impl Run {
             };
             return Err(Box::new(self.stop(fault)));
         };
+        let hand = self.held.map(|h| (h, self.state.positions[h.point]));
         let result = solver.step(
             &self.scene.mesh,
             &self.settings.colliders,
             &self.settings.params,
             &mut self.state,
         );
+        if let (Ok(_), Some((held, from))) = (&result, hand) {
+            // NOTE: the hand carries the point the rest of the way to its target over the
+            // steps left in this frame, whatever the solver did with it, and leaves it with
+            // the hand's velocity: released, it flies on at that velocity.
+            let left = self.settings.params.steps_per_frame - self.step_in_frame;
+            let at = from + (held.to - from) / f64::from(left.max(1));
+            self.state.positions[held.point] = at;
+            self.state.last[held.point] = from;
+        }
         if let Err(e) = result {
             let fault = Fault {
                 time: self.time,
@@ -852,5 +959,80 @@ mod tests {
                 "{name}: the curtain is flat, so the push is symmetric ({along}, {against})"
             );
         }
+    }
+
+    #[test]
+    fn a_grabbed_point_follows_the_hand_within_a_frame_and_keeps_its_velocity_when_released() {
+        let scene = cloth_scene::load("pinned4", &[]).unwrap();
+        let mut run = Run::new(scene, crate::default_registry(), None).unwrap();
+        let point = run.scene.mesh.index(25, 25);
+        let start = run.state.positions[point];
+        let to = start + Vec3::new(0.0, 0.1, 0.0);
+        run.apply(Command::Touch(Touch::Grab { point, to }))
+            .unwrap();
+        run.step_frame().unwrap();
+        assert_eq!(
+            run.state.positions[point], to,
+            "at the hand after one frame"
+        );
+        let to = to + Vec3::new(0.05, 0.0, 0.0);
+        run.apply(Command::Touch(Touch::Drag { to })).unwrap();
+        run.step_frame().unwrap();
+        assert_eq!(run.state.positions[point], to);
+        // The hand moved 5 cm in the frame, the last step's share of it 1/30 of that.
+        let v = (run.state.positions[point] - run.state.last[point]) / run.dt();
+        assert!(v.x > 0.0 && (v.x - 0.05 * 90.0).abs() < 1e-9, "{v}");
+        run.apply(Command::Touch(Touch::Release)).unwrap();
+        run.step_frame().unwrap();
+        assert_ne!(
+            run.state.positions[point], to,
+            "released, the springs take it"
+        );
+        assert!(run.held.is_none());
+        assert!(run.record.last().unwrap().kinetic_energy_j > 0.0);
+    }
+
+    #[test]
+    fn a_poke_adds_velocity_to_a_free_point_only_and_bad_touches_change_nothing() {
+        let scene = cloth_scene::load("pinned4", &[]).unwrap();
+        let mut run = Run::new(scene, crate::default_registry(), None).unwrap();
+        let mesh = run.scene.mesh.clone();
+        let free = mesh.index(25, 25);
+        let velocity = Vec3::new(0.0, 0.0, 2.0);
+        run.touch(Touch::Poke {
+            point: free,
+            velocity,
+        })
+        .unwrap();
+        let v = (run.state.positions[free] - run.state.last[free]) / run.dt();
+        assert!((v - velocity).norm() < 1e-9, "{v}");
+        let pinned = mesh.pinned().iter().position(|p| *p).unwrap();
+        run.touch(Touch::Poke {
+            point: pinned,
+            velocity,
+        })
+        .unwrap();
+        assert_eq!(
+            run.state.positions[pinned], run.state.last[pinned],
+            "a pin stays put"
+        );
+        let before = run.state.clone();
+        let e = run
+            .touch(Touch::Poke {
+                point: mesh.len(),
+                velocity,
+            })
+            .unwrap_err();
+        assert!(e.contains("is not on the cloth"), "{e}");
+        let e = run
+            .touch(Touch::Grab {
+                point: free,
+                to: Vec3::new(f64::NAN, 0.0, 0.0),
+            })
+            .unwrap_err();
+        assert!(e.contains("not three finite numbers"), "{e}");
+        let e = run.touch(Touch::Drag { to: Vec3::zeros() }).unwrap_err();
+        assert!(e.contains("grab one first"), "{e}");
+        assert_eq!(run.state, before);
     }
 }
