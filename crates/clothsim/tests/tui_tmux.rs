@@ -18,10 +18,11 @@ const START: u64 = 60;
 const ANSWER: u64 = 15;
 
 /// What tmux reports of the terminal while the UI runs: alternate screen on, cursor hidden,
-/// mouse tracked.
-const UI_MODES: &str = "1 0 1";
+/// presses and drags reported, and not every motion of the pointer (mode 1003 would send a
+/// report for each cell crossed).
+const UI_MODES: &str = "1 0 1 0";
 /// ... and what a shell expects: alternate screen off, cursor shown, no mouse tracking.
-const SHELL_MODES: &str = "0 1 0";
+const SHELL_MODES: &str = "0 1 0 0";
 
 /// A private tmux server (its own socket) with one pane running `sh`, killed when the test
 /// ends however it ends.
@@ -78,14 +79,15 @@ impl Tmux {
         String::from_utf8_lossy(&o.stdout).into_owned()
     }
 
-    /// The terminal's modes as tmux sees them: `alternate_on cursor_flag mouse_any_flag`.
+    /// The terminal's modes as tmux sees them: `alternate_on cursor_flag mouse_button_flag
+    /// mouse_any_flag`.
     fn modes(&self) -> String {
         let o = self.run(&[
             "display",
             "-p",
             "-t",
             "e2e",
-            "#{alternate_on} #{cursor_flag} #{mouse_any_flag}",
+            "#{alternate_on} #{cursor_flag} #{mouse_button_flag} #{mouse_any_flag}",
         ]);
         String::from_utf8_lossy(&o.stdout).trim().to_owned()
     }

@@ -3,18 +3,20 @@
 //!
 //! Elm architecture: a model ([`App`]), messages ([`Message`]), one [`update()`] function that
 //! changes the model, and a pure [`view()`]. Terminal events become messages in `input`
-//! (after `escape` joins split escape sequences); the one `keymap::KEYMAP` dispatches keys
+//! (after `decode` has read them from the terminal's bytes); the one `keymap::KEYMAP` dispatches keys
 //! and generates the footer and the help; the one `params::PARAMS` table drives the
 //! parameter panel. The cloth steps on its own thread (`worker`), which owns the simulation
 //! clock (compare mode's variants on one coordinator that steps them in lockstep,
 //! `lockstep`); the loop in `runner` waits on one channel for keys, signals and the worker's
-//! snapshots, answers each at once and draws at most `--fps` times a second.
+//! snapshots, answers each at once and draws at most `--fps` times a second, paced by what the
+//! terminal has taken (`link`) and written as the cells that changed (`screen`).
 
 mod compare;
-mod escape;
+mod decode;
 mod input;
 mod keymap;
 mod layout;
+mod link;
 mod lockstep;
 mod message;
 mod model;
@@ -22,6 +24,7 @@ mod panes;
 mod params;
 mod recording;
 mod runner;
+mod screen;
 mod sgr;
 mod terminal;
 mod theme;
@@ -72,12 +75,15 @@ pub struct Args {
     pub mode: Mode,
     /// Start from a state that `simulate` wrote (its positions and last positions, so the
     /// cloth keeps its velocity) instead of the scene's flat start; its grid and pins must be
-    /// the scene's. The clock goes on from the state's time; R still resets to the flat start.
+    /// the scene's. The clock goes on from the state's time; r resets to the scene's flat start.
     pub from: Option<std::path::PathBuf>,
     /// Most memory a cloth may take (e.g. 512M, 4G; powers of 1024): a scene whose solver,
     /// states and frames would need more is refused, at start and when opened. Default: the
     /// memory the system has available.
     pub max_memory: Option<u64>,
+    /// Most bytes per second written to the terminal; drawing slows down to fit, the
+    /// simulation does not. Without it drawing is paced by what the terminal has taken.
+    pub max_rate: Option<u64>,
 }
 
 impl Default for Args {
@@ -94,6 +100,7 @@ impl Default for Args {
             mode: Mode::Ascii,
             from: None,
             max_memory: None,
+            max_rate: None,
         }
     }
 }
@@ -327,7 +334,7 @@ pub fn run_compare(args: &CompareArgs, registry: &Registry) -> anyhow::Result<()
         );
     }
     let app = build_compare_in(args, registry, true, &env)?;
-    runner::run(app, args.ui.fps)
+    runner::run(app, args.ui.fps, args.ui.max_rate)
 }
 
 /// Runs the live UI until the user quits.
@@ -353,5 +360,5 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         );
     }
     let app = build_in(args, registry, true, &env)?;
-    runner::run(app, args.fps)
+    runner::run(app, args.fps, args.max_rate)
 }

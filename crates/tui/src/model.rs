@@ -175,6 +175,8 @@ pub struct Stats {
     pub draws_per_sec: f64,
     /// Wall time per drawn frame (render + draw + write), ms.
     pub draw_ms: f64,
+    /// Whether the terminal (or `--max-rate`) held drawing back, and the bytes written.
+    pub link: crate::link::Measure,
 }
 
 /// What to show in each pane slot at start: side and top first (the two-pane default).
