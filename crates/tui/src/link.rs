@@ -73,9 +73,12 @@ pub struct Pacer {
     /// The cap's token bucket: bytes that may be written now (negative: owed).
     tokens: f64,
     refilled: Option<Instant>,
-    /// Since the last [`Self::measure`]: bytes written, and whether drawing was held or cut.
+    /// Since the last [`Self::measure`]: bytes written, frames cut, time a due frame waited.
     written: usize,
-    held: bool,
+    cut: usize,
+    held: Duration,
+    /// When the frame now waiting fell due.
+    due: Option<Instant>,
     held_by_cap: bool,
 }
 
@@ -93,7 +96,9 @@ impl Pacer {
             tokens: 0.0,
             refilled: None,
             written: 0,
-            held: false,
+            cut: 0,
+            held: Duration::ZERO,
+            due: None,
             held_by_cap: false,
         }
     }
@@ -122,16 +127,17 @@ impl Pacer {
     pub fn may_draw(&mut self, now: Instant) -> bool {
         self.notice_silence(now);
         self.refill(now);
-        if self.waiting(now) {
-            self.held = true;
-            return false;
+        let capped = self.cap.is_some() && self.tokens < 0.0;
+        !(self.waiting(now) || capped)
+    }
+
+    /// A frame fell due at `now` and [`Self::may_draw`] said no: the wait counts as drawing
+    /// limited by the terminal (or the cap) until the frame goes out.
+    pub fn hold(&mut self, now: Instant) {
+        if self.due.is_none() {
+            self.due = Some(now);
+            self.held_by_cap |= !self.waiting(now);
         }
-        if self.cap.is_some() && self.tokens < 0.0 {
-            self.held = true;
-            self.held_by_cap = true;
-            return false;
-        }
-        true
     }
 
     /// Most bytes the next frame may take (`None`: all it needs).
@@ -165,8 +171,11 @@ impl Pacer {
     /// budget left cells for later.
     pub fn sent(&mut self, bytes: usize, queried: bool, cut: bool, now: Instant) {
         self.written += bytes;
+        if let Some(due) = self.due.take() {
+            self.held += now.saturating_duration_since(due);
+        }
         if cut {
-            self.held = true;
+            self.cut += 1;
             self.held_by_cap |= self.cap.is_some_and(|c| self.rate.is_none_or(|r| c < r));
         }
         if self.cap.is_some() {
@@ -238,21 +247,34 @@ impl Pacer {
         at
     }
 
+    /// Status queries written and not answered (none once the terminal is found silent).
+    pub fn in_flight(&self) -> usize {
+        if self.silent { 0 } else { self.queries.len() }
+    }
+
     /// Whether the terminal was found not to answer status queries.
     #[cfg(test)]
     pub fn silent(&self) -> bool {
         self.silent
     }
 
-    /// What happened over the `span` since the last call; starts a new while.
-    pub fn measure(&mut self, span: Duration) -> Measure {
+    /// What happened over the `span` up to `now` since the last call; starts a new while.
+    /// Drawing counts as limited when frames were cut or due frames waited a tenth of it.
+    pub fn measure(&mut self, span: Duration, now: Instant) -> Measure {
+        let mut held = self.held;
+        if let Some(due) = self.due {
+            held += now.saturating_duration_since(due);
+            self.due = Some(now);
+        }
+        let limited = self.cut > 0 || held >= span / 10;
         let m = Measure {
-            limited: self.held,
-            by_cap: self.held_by_cap,
+            limited,
+            by_cap: limited && self.held_by_cap,
             bytes_per_sec: self.written as f64 / span.as_secs_f64().max(1e-9),
         };
         self.written = 0;
-        self.held = false;
+        self.cut = 0;
+        self.held = Duration::ZERO;
         self.held_by_cap = false;
         m
     }
@@ -366,6 +388,8 @@ mod tests {
                 assert!(b <= (cap as f64 * TARGET.as_secs_f64()) as usize + SMALLEST);
                 p.sent(b, false, true, now);
                 total += b;
+            } else {
+                p.hold(now);
             }
             now += Duration::from_millis(5);
         }
@@ -373,7 +397,37 @@ mod tests {
         let most = 10 * cap as usize + SMALLEST.max(640);
         assert!(total <= most, "{total} > {most}");
         assert!(total >= 9 * cap as usize, "{total}");
-        assert!(p.measure(Duration::from_secs(10)).by_cap);
+        assert!(p.measure(Duration::from_secs(10), now).by_cap);
+    }
+
+    #[test]
+    fn drawing_is_limited_only_when_due_frames_wait_or_are_cut() {
+        let t0 = Instant::now();
+        let mut p = Pacer::new(None);
+        // A local terminal: every answer within a millisecond, frames never wait long.
+        let mut now = t0;
+        for _ in 0..30 {
+            assert!(p.may_draw(now));
+            p.sent(5000, true, false, now);
+            now += Duration::from_millis(1);
+            assert!(!p.may_draw(now));
+            p.hold(now);
+            now += Duration::from_micros(500);
+            p.answered(now);
+            p.sent(0, false, false, now);
+            now += Duration::from_millis(32);
+        }
+        assert!(!p.measure(now - t0, now).limited);
+        // A slow one: each due frame waits 100 ms for the answer.
+        let t1 = now;
+        for _ in 0..10 {
+            p.sent(5000, true, false, now);
+            p.hold(now);
+            now += Duration::from_millis(100);
+            p.answered(now);
+        }
+        let m = p.measure(now - t1, now);
+        assert!(m.limited && !m.by_cap, "{m:?}");
     }
 
     #[test]

@@ -72,9 +72,14 @@ pub fn run(mut app: App, fps: u32, max_rate: Option<u64>) -> anyhow::Result<()> 
     let mut guard =
         TerminalGuard::enter(app.mouse, sixteen).context("cannot set up the terminal")?;
     spawn_input(tx).context("cannot read the keyboard")?;
-    let end = event_loop(&mut guard, &mut app, (fps, Pacer::new(max_rate)), &rx);
+    let mut pacer = Pacer::new(max_rate);
+    let end = event_loop(&mut guard, &mut app, (fps, &mut pacer), &rx);
     // A recording ends with the UI, kept as far as it went.
     let recorded = app.stop_recording();
+    // The screen goes back at once; raw mode stays until the answers to the queries still
+    // in flight are in, or they would be typed into the shell.
+    guard.leave_screen();
+    settle(&rx, &mut pacer);
     guard.leave();
     drop(guard);
     signals.close();
@@ -159,7 +164,7 @@ impl Meter {
 fn event_loop(
     guard: &mut TerminalGuard,
     app: &mut App,
-    (fps, mut pacer): (u32, Pacer),
+    (fps, pacer): (u32, &mut Pacer),
     rx: &Receiver<Wake>,
 ) -> anyhow::Result<End> {
     let interval = Duration::from_secs_f64(1.0 / f64::from(fps));
@@ -214,7 +219,7 @@ fn event_loop(
                 }
                 Wake::Signal(sig) => match signals::meaning(sig) {
                     signals::Meaning::Stop => {
-                        suspend(guard)?;
+                        suspend(guard, rx, pacer)?;
                         dirty = true;
                         urgent = true;
                     }
@@ -256,7 +261,7 @@ fn event_loop(
         app.sync();
         if app.suspend {
             app.suspend = false;
-            suspend(guard)?;
+            suspend(guard, rx, pacer)?;
             dirty = true;
             urgent = true;
         }
@@ -286,7 +291,7 @@ fn event_loop(
                 } else {
                     0.0
                 },
-                link: pacer.measure(span),
+                link: pacer.measure(span, now),
             };
             meter = Meter::new(now);
             if stats != app.stats {
@@ -295,7 +300,10 @@ fn event_loop(
             }
         }
 
-        if dirty && (urgent || now >= next_draw) && pacer.may_draw(now) {
+        let due = dirty && (urgent || now >= next_draw);
+        if due && !pacer.may_draw(now) {
+            pacer.hold(now);
+        } else if due {
             let size = guard.terminal.size()?;
             panes::prepare(app, Rect::new(0, 0, size.width, size.height));
             // NOTE: the finished buffer is copied out because the terminal lends it only
@@ -333,8 +341,51 @@ fn event_loop(
     }
 }
 
+/// Longest wait for the answers to the status queries in flight when the UI leaves.
+const SETTLE: Duration = Duration::from_millis(500);
+
+/// Waits (at most [`SETTLE`]) for the answers to the status queries still in flight, so that
+/// none reaches the shell as typed text once raw mode is off; returns what else arrived.
+fn settle(rx: &Receiver<Wake>, pacer: &mut Pacer) -> Vec<Wake> {
+    let deadline = Instant::now() + SETTLE;
+    let mut decoder = Decoder::new();
+    let mut others = Vec::new();
+    while pacer.in_flight() > 0 {
+        let Some(left) = deadline.checked_duration_since(Instant::now()) else {
+            break;
+        };
+        match rx.recv_timeout(left) {
+            Ok(Wake::Input(Ok(bytes))) => {
+                for input in decoder.push(&bytes, Instant::now()) {
+                    if input == Input::Answer {
+                        pacer.answered(Instant::now());
+                    }
+                }
+            }
+            Ok(Wake::Input(Err(_))) | Err(_) => break,
+            Ok(other) => others.push(other),
+        }
+    }
+    others
+}
+
 /// Leaves the terminal and stops the process as SIGTSTP would; on `fg`, enters it again.
-fn suspend(guard: &mut TerminalGuard) -> anyhow::Result<()> {
+fn suspend(
+    guard: &mut TerminalGuard,
+    rx: &Receiver<Wake>,
+    pacer: &mut Pacer,
+) -> anyhow::Result<()> {
+    guard.leave_screen();
+    // What arrives meanwhile (a snapshot, a signal) is of no use to a stopped process but a
+    // terminating signal, which ends it now.
+    for wake in settle(rx, pacer) {
+        if let Wake::Signal(sig) = wake
+            && matches!(signals::meaning(sig), signals::Meaning::End)
+        {
+            guard.leave();
+            signals::die_of(sig);
+        }
+    }
     guard.leave();
     signals::stop_self();
     guard

@@ -90,6 +90,18 @@ impl TerminalGuard {
         }
     }
 
+    /// Puts the shell's screen back (the alternate screen left, the cursor shown, the mouse
+    /// freed) but stays in raw mode, so that what the terminal still sends is read, not echoed.
+    pub fn leave_screen(&mut self) {
+        if self.entered {
+            let mut out = io::stdout();
+            let _ = out.write_all(MOUSE_OFF);
+            let _ = out.write_all(b"\x1b[0m");
+            let _ = execute!(out, LeaveAlternateScreen, Show);
+            let _ = out.flush();
+        }
+    }
+
     /// Leaves the terminal as the shell expects it (idempotent).
     pub fn leave(&mut self) {
         if self.entered {
