@@ -294,6 +294,10 @@ fn over_16_kb_per_second_space_shows_paused_and_q_leaves_within_300_ms() {
         queued < RATE / 2,
         "{queued} bytes wait in the link: more than half a second"
     );
+    // The header says why the cloth moves in steps.
+    link.wait("the header's notice", Duration::from_secs(5), |f| {
+        f.row(0).contains("limited by the terminal")
+    });
     link.key(b" ");
     let paused = link.wait("PAUSED", Duration::from_secs(20), |f| {
         f.row(0).contains("PAUSED")

@@ -143,10 +143,15 @@ impl Tmux {
     /// Starts clothsim with `args` in the pane, its pid written to a file, and the exit
     /// status echoed when it ends; waits for the UI.
     fn clothsim(&self, args: &str) -> u32 {
+        self.clothsim_with("", args)
+    }
+
+    /// As [`Self::clothsim`], with environment assignments `env` (`NAME=VALUE ...`).
+    fn clothsim_with(&self, env: &str, args: &str) -> u32 {
         let bin = env!("CARGO_BIN_EXE_clothsim");
         self.keys(&["clear", "Enter"]);
         self.keys(&[
-            &format!("sh -c 'echo $$ > pid; exec \"{bin}\" {args}'; echo \"exit=$?\""),
+            &format!("sh -c 'echo $$ > pid; exec env {env} \"{bin}\" {args}'; echo \"exit=$?\""),
             "Enter",
         ]);
         self.wait_for("the UI", START, |s| s.contains("parameters"));
@@ -548,4 +553,21 @@ fn r_records_the_screen_to_a_cast_file_named_in_the_status_line() {
     t.wait_for("the recording played back", ANSWER, |s| {
         s.contains("t 0.011 s") && s.contains("REC pinned4.cast")
     });
+}
+
+#[test]
+fn an_explicit_colour_flag_beats_no_color() {
+    let Some(t) = Tmux::start("nocolor", 100, 30) else {
+        return;
+    };
+    t.clothsim_with("NO_COLOR=1", "tui pinned4 --paused --color 256");
+    // The pane's cells with their colours as escapes: the cloth's glyphs are coloured.
+    let o = t.run(&["capture-pane", "-p", "-e", "-t", "e2e"]);
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        s.contains("38;5;"),
+        "no 256-colour foreground on screen:\n{s}"
+    );
+    t.keys(&["q"]);
+    t.wait_for("the shell", ANSWER, |s| s.contains("exit=0"));
 }
