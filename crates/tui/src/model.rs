@@ -257,6 +257,8 @@ pub struct App {
     pub drag: Option<(u16, u16)>,
     /// Set by quit.
     pub quit: bool,
+    /// What a save asked for from the quit or open dialog goes on to once the file is written.
+    pub after_save: Option<Then>,
     /// Set by Ctrl-Z: the loop suspends the app (and clears it).
     pub suspend: bool,
     /// Whether the mouse is captured (wheel and drag work; the terminal cannot select text).
@@ -328,6 +330,7 @@ impl App {
             renderer: Renderer::new(),
             drag: None,
             quit: false,
+            after_save: None,
             cwd: PathBuf::from("."),
             max_memory: None,
             compare: None,

@@ -1510,3 +1510,48 @@ fn a_solver_switch_in_the_ui_keeps_the_falling_cloths_kinetic_energy() {
         "{after} J after the switch, {before} J under verlet"
     );
 }
+
+#[test]
+fn s_in_the_quit_dialog_saves_then_quits_and_esc_from_its_prompt_does_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    press(&mut app, KeyCode::Right);
+    press(&mut app, KeyCode::Char('q'));
+    press(&mut app, KeyCode::Char('S'));
+    // Esc from the file name keeps the app: nothing saved, no quit.
+    press(&mut app, KeyCode::Esc);
+    assert!(!app.quit);
+    // A save begun from the main screen does not quit either.
+    press(&mut app, KeyCode::Char('S'));
+    press(&mut app, KeyCode::Enter);
+    assert!(!app.quit, "S from the main screen only saves");
+    press(&mut app, KeyCode::Right);
+    press(&mut app, KeyCode::Char('q'));
+    press(&mut app, KeyCode::Char('S'));
+    press(&mut app, KeyCode::Enter);
+    // The file exists: overwrite it, and then the quit goes through.
+    assert!(matches!(app.overlay, Overlay::ConfirmOverwrite(_)));
+    press(&mut app, KeyCode::Char('y'));
+    let saved = cloth_scene::load(&dir.path().join("pinned4-edited.json").to_string_lossy(), &[])
+        .unwrap();
+    assert_eq!(saved.params, app.sim.settings.params);
+    assert!(app.quit, "S in the quit dialog saves and quits");
+}
+
+#[test]
+fn the_help_scrolls_no_further_than_its_last_row() {
+    let mut app = app_with("pinned4", true);
+    let _ = screen(&mut app, 60, 24);
+    press(&mut app, KeyCode::Char('?'));
+    let top = screen(&mut app, 60, 24);
+    for _ in 0..100 {
+        press(&mut app, KeyCode::Down);
+    }
+    let bottom = screen(&mut app, 60, 24);
+    assert_ne!(top, bottom, "the help scrolls at 60 x 24");
+    // One step back up shows the row above at once.
+    press(&mut app, KeyCode::Up);
+    let back = screen(&mut app, 60, 24);
+    assert_ne!(back, bottom, "one press up scrolls back");
+}

@@ -28,7 +28,10 @@ pub fn update(app: &mut App, msg: Message) {
                 app.quit = true;
             }
         }
-        Message::Escape => escape(app),
+        Message::Escape => {
+            app.after_save = None;
+            escape(app);
+        }
         Message::Suspend => app.suspend = true,
         Message::ToggleMouse => {
             app.mouse = !app.mouse;
@@ -147,6 +150,11 @@ pub fn update(app: &mut App, msg: Message) {
             }
         }
         Message::Save => {
+            // S in the quit (or open) dialog saves, then quits (or opens), as it says.
+            app.after_save = match app.overlay {
+                Overlay::ConfirmDiscard(then) => Some(then),
+                _ => None,
+            };
             let stem = scene_stem(app);
             app.overlay = Overlay::Prompt(Prompt::prefilled(
                 Purpose::SavePath,
@@ -222,7 +230,9 @@ pub fn update(app: &mut App, msg: Message) {
         }),
         Message::Move(d) => match &mut app.overlay {
             Overlay::Help => {
-                app.help_scroll = (i64::from(app.help_scroll) + i64::from(d)).clamp(0, 200) as u16;
+                // The scroll stops where the last row shows, so the way back is as short.
+                let most = i64::from(super::view::help_scroll_max(app));
+                app.help_scroll = (i64::from(app.help_scroll) + i64::from(d)).clamp(0, most) as u16;
             }
             Overlay::Picker(p) => {
                 // NOTE: the list stops at its ends rather than wrapping, so a held key does
@@ -997,6 +1007,11 @@ fn save(app: &mut App, path: &std::path::Path) -> anyhow::Result<()> {
     match written.note() {
         Some(note) => app.say(Level::Warn, format!("{saved}; {note}")),
         None => app.say(Level::Info, saved),
+    }
+    match app.after_save.take() {
+        Some(Then::Quit) => app.quit = true,
+        Some(Then::Open) => open_picker(app),
+        None => {}
     }
     Ok(())
 }

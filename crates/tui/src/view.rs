@@ -57,6 +57,20 @@ pub fn view(app: &App, f: &mut Frame) {
     }
 }
 
+/// How far the help overlay scrolls on the app's screen before its last row shows.
+pub fn help_scroll_max(app: &App) -> u16 {
+    let area = Rect::new(0, 0, app.screen.0, app.screen.1);
+    let Some(r) = layout::regions(app, area) else {
+        return 0;
+    };
+    let body = Rect {
+        y: r.title.y + 1,
+        height: r.note.y.saturating_sub(r.title.y + 1),
+        ..area
+    };
+    overlay::help_scroll_max(body)
+}
+
 fn pane(app: &App, f: &mut Frame, slot: usize, rect: Rect, theme: &Theme) {
     let view = app.views[slot];
     let focused = slot == app.focus && app.visible_slots().len() > 1;

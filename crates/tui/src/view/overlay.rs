@@ -39,11 +39,21 @@ fn boxed(
     inside
 }
 
-/// The help, generated from [`KEYMAP`]: two columns when wide enough, else one that scrolls;
-/// the box fits its text, so it sits centred.
-pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
-    /// Columns between the two columns of keys.
-    const GAP: usize = 4;
+/// The help's text laid out for `area`: its columns, whether there are two, the box's width
+/// and the rows.
+struct HelpText {
+    left: Vec<Line<'static>>,
+    right: Vec<Line<'static>>,
+    two: bool,
+    w: u16,
+    rows: u16,
+    left_w: u16,
+}
+
+/// Columns between the two columns of keys.
+const GAP: usize = 4;
+
+fn help_text(area: Rect, theme: &Theme) -> HelpText {
     let key_w = KEYMAP
         .iter()
         .map(|b| keys_label(b).chars().count())
@@ -98,6 +108,34 @@ pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     } else {
         width(&left) as u16 + 2
     };
+    HelpText {
+        left_w: width(&left) as u16,
+        left,
+        right,
+        two,
+        w,
+        rows,
+    }
+}
+
+/// How far the help scrolls in `area` before its last row is at the bottom.
+pub fn help_scroll_max(area: Rect) -> u16 {
+    let t = help_text(area, &Theme::new(false));
+    let inside = (t.rows + 2).min(area.height).saturating_sub(2);
+    t.rows.saturating_sub(inside)
+}
+
+/// The help, generated from [`KEYMAP`]: two columns when wide enough, else one that scrolls;
+/// the box fits its text, so it sits centred.
+pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
+    let HelpText {
+        left,
+        right,
+        two,
+        w,
+        rows,
+        left_w,
+    } = help_text(area, theme);
     let inside = boxed(
         f,
         area,
@@ -108,7 +146,7 @@ pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     );
     let scroll = app.help_scroll.min(rows.saturating_sub(inside.height));
     if two {
-        let lw = width(&left) as u16;
+        let lw = left_w;
         f.render_widget(
             Paragraph::new(left).scroll((scroll, 0)),
             Rect {
