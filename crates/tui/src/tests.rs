@@ -1533,8 +1533,11 @@ fn s_in_the_quit_dialog_saves_then_quits_and_esc_from_its_prompt_does_not() {
     // The file exists: overwrite it, and then the quit goes through.
     assert!(matches!(app.overlay, Overlay::ConfirmOverwrite(_)));
     press(&mut app, KeyCode::Char('y'));
-    let saved = cloth_scene::load(&dir.path().join("pinned4-edited.json").to_string_lossy(), &[])
-        .unwrap();
+    let saved = cloth_scene::load(
+        &dir.path().join("pinned4-edited.json").to_string_lossy(),
+        &[],
+    )
+    .unwrap();
     assert_eq!(saved.params, app.sim.settings.params);
     assert!(app.quit, "S in the quit dialog saves and quits");
 }
@@ -1554,4 +1557,37 @@ fn the_help_scrolls_no_further_than_its_last_row() {
     press(&mut app, KeyCode::Up);
     let back = screen(&mut app, 60, 24);
     assert_ne!(back, bottom, "one press up scrolls back");
+}
+
+#[test]
+fn s_saves_only_what_the_scene_gave_or_the_user_edited() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut app = app_with("drape", true);
+    app.cwd = dir.path().to_owned();
+    press(&mut app, KeyCode::Right); // ks up one step
+    press(&mut app, KeyCode::Char('S'));
+    press(&mut app, KeyCode::Enter);
+    let path = dir.path().join("drape-edited.json");
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(!text.contains("simulation_steps"), "{text}");
+    assert!(!text.contains("gravity"), "{text}");
+    // Loaded with an implicit solver, the steps are that solver's, as for the original.
+    let registry = cloth_run::default_registry();
+    let saved = cloth_scene::load(&path.to_string_lossy(), &[]).unwrap();
+    let original = cloth_scene::load("drape", &[]).unwrap();
+    let implicit = registry.get("implicit").unwrap();
+    assert_eq!(
+        cloth_run::solvers::steps_for(&saved, implicit),
+        cloth_run::solvers::steps_for(&original, implicit)
+    );
+    // An edited steps per frame is saved.
+    select(&mut app, "steps/frame");
+    press(&mut app, KeyCode::Right);
+    let steps = app.sim.settings.params.steps_per_frame;
+    press(&mut app, KeyCode::Char('S'));
+    press(&mut app, KeyCode::Enter);
+    press(&mut app, KeyCode::Char('y'));
+    let saved = cloth_scene::load(&path.to_string_lossy(), &[]).unwrap();
+    assert_eq!(saved.params.steps_per_frame, steps);
+    assert!(saved.gives_steps());
 }

@@ -989,12 +989,31 @@ fn answer(app: &mut App, yes: bool) {
 
 fn save(app: &mut App, path: &std::path::Path) -> anyhow::Result<()> {
     let sim = &app.sim;
-    let file = sim.scene.to_file(
+    let mut file = sim.scene.to_file(
         &sim.settings.params,
         &sim.settings.colliders,
         sim.entry().name(),
         sim.options(),
     );
+    // A key the scene did not give stays out unless its value was edited, so the saved scene
+    // loads as the original did: above all, steps per frame that follow the solver's
+    // recommendation must not be pinned to the number the current solver happens to use.
+    let given = sim.scene.file.simulation.clone().unwrap_or_default();
+    let (now, loaded) = (&sim.settings.params, &sim.scene.params);
+    if let Some(s) = file.simulation.as_mut() {
+        if given.simulation_steps.is_none() && sim.steps_follow_solver() {
+            s.simulation_steps = None;
+        }
+        if given.frames_per_sec.is_none() && now.frames_per_sec == loaded.frames_per_sec {
+            s.frames_per_sec = None;
+        }
+        if given.gravity.is_none() && now.gravity == loaded.gravity {
+            s.gravity = None;
+        }
+        if given.self_collision.is_none() && now.self_collision == loaded.self_collision {
+            s.self_collision = None;
+        }
+    }
     let mut text = serde_json::to_string_pretty(&file)?;
     text.push('\n');
     let written = output::write_atomic(path, text.as_bytes())?;
