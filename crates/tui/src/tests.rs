@@ -1227,13 +1227,7 @@ fn snapshot_compare_three_stiffnesses() {
     // In lockstep: the same simulated time for each.
     assert!(sims.iter().all(|s| s.steps == sims[0].steps && s.steps > 0));
     let screen = screen(&mut app, 160, 48);
-    for needle in [
-        "ks=1 ",
-        "ks=5000",
-        "ks=100000",
-        "centre height",
-        "1,5000,100000",
-    ] {
+    for needle in ["ks=1 ", "ks=5000", "ks=100000", "centre m", "1,5000,100000"] {
         assert!(screen.contains(needle), "{needle} in:\n{screen}");
     }
     insta::assert_snapshot!("compare_ks_160x48", screen);
@@ -1590,4 +1584,48 @@ fn s_saves_only_what_the_scene_gave_or_the_user_edited() {
     let saved = cloth_scene::load(&path.to_string_lossy(), &[]).unwrap();
     assert_eq!(saved.params.steps_per_frame, steps);
     assert!(saved.gives_steps());
+}
+
+#[test]
+fn the_compare_table_keeps_every_figure_whole_and_tells_the_variants_apart() {
+    let mut app = compare_with("pinned4", &["cloth.ks=1,5000", "cloth.density=10,150"]);
+    assert!(run_for(&mut app, 0.3));
+    let kinetic: Vec<String> = compared(&app)
+        .iter()
+        .map(|sim| super::view::sig(sim.history.back().unwrap().kinetic))
+        .collect();
+    for (w, h) in [(100, 30), (80, 24), (160, 48)] {
+        let shown = screen(&mut app, w, h);
+        for k in &kinetic {
+            assert!(
+                shown.contains(&format!(" {k} ")),
+                "{w} x {h}: the kinetic energy {k} is not whole:\n{shown}"
+            );
+        }
+        assert!(shown.contains("kinetic J"), "{w} x {h}:\n{shown}");
+        // Each variant's name is on screen whole: in its row or in the legend.
+        let c = app.compare.as_ref().unwrap();
+        let titles: Vec<String> = std::iter::once(c.title.clone())
+            .chain(c.members.iter().map(|m| m.title.clone()))
+            .collect();
+        for t in &titles {
+            assert!(
+                shown.contains(t.as_str()),
+                "{w} x {h}: {t:?} is cut:\n{shown}"
+            );
+        }
+    }
+}
+
+#[test]
+fn figures_keep_four_significant_digits_and_their_exponent() {
+    use super::view::sig;
+    assert_eq!(sig(2.28e-6), "2.280e-6");
+    assert_eq!(sig(-0.61234), "-0.6123");
+    assert_eq!(sig(1.1264), "1.126");
+    assert_eq!(sig(12346.0), "1.235e4");
+    assert_eq!(sig(9.99996), "10.00");
+    assert_eq!(sig(0.012345), "0.01235");
+    assert_eq!(sig(0.0), "0");
+    assert_eq!(sig(f64::NAN), "-");
 }

@@ -57,6 +57,13 @@ pub fn view(app: &App, f: &mut Frame) {
     }
 }
 
+pub use compare::sig;
+
+/// Rows compare mode's table needs at `width` columns.
+pub fn compare_table_height(app: &App, width: u16) -> u16 {
+    compare::table_height(app, width)
+}
+
 /// How far the help overlay scrolls on the app's screen before its last row shows.
 pub fn help_scroll_max(app: &App) -> u16 {
     let area = Rect::new(0, 0, app.screen.0, app.screen.1);
