@@ -157,6 +157,8 @@ pub struct Picker {
     pub selected: usize,
     /// `*.json` files in the working folder, sorted by name.
     pub files: Vec<String>,
+    /// Which of [`Self::files`] are state files (`simulate`'s output, for `--from`), not scenes.
+    pub states: Vec<bool>,
 }
 
 impl Picker {

@@ -1629,3 +1629,28 @@ fn figures_keep_four_significant_digits_and_their_exponent() {
     assert_eq!(sig(0.0), "0");
     assert_eq!(sig(f64::NAN), "-");
 }
+
+#[test]
+fn the_picker_labels_a_state_file_as_a_state_not_a_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, state) = paused_pinned4_with_a_state_file_at_frame_3(dir.path());
+    let name = state.file_name().unwrap().to_string_lossy().into_owned();
+    std::fs::write(
+        dir.path().join("mine.json"),
+        cloth_scene::bundled("sphere").unwrap().json,
+    )
+    .unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    press(&mut app, KeyCode::Char('o'));
+    let shown = screen(&mut app, 140, 44);
+    let line = |n: &str| {
+        shown
+            .lines()
+            .find(|l| l.contains(n))
+            .unwrap_or_default()
+            .to_owned()
+    };
+    assert!(line(&name).contains("a cloth's state"), "{shown}");
+    assert!(line("mine.json").contains("scene file"), "{shown}");
+}

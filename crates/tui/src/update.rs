@@ -860,6 +860,21 @@ fn prompt_edit(app: &mut App, f: impl FnOnce(&mut Prompt)) {
     }
 }
 
+/// Whether `path` holds a cloth's state (what `simulate` writes) rather than a scene: its
+/// first key is the state's, where a scene's never is.
+fn is_state_file(path: &std::path::Path) -> bool {
+    use std::io::Read as _;
+    let mut head = [0u8; 64];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .unwrap_or(0);
+    let text = String::from_utf8_lossy(&head[..n]);
+    text.trim_start()
+        .trim_start_matches('{')
+        .trim_start()
+        .starts_with("\"num_width_points\"")
+}
+
 /// The `*.json` files directly in `dir`, sorted; none if it cannot be read.
 fn json_files(dir: &std::path::Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
@@ -1116,7 +1131,15 @@ fn open_picker(app: &mut App) {
                 .map(|i| cloth_scene::BUNDLED.len() + i)
         })
         .unwrap_or(0);
-    app.overlay = Overlay::Picker(Picker { selected, files });
+    let states = files
+        .iter()
+        .map(|f| is_state_file(&app.cwd.join(f)))
+        .collect();
+    app.overlay = Overlay::Picker(Picker {
+        selected,
+        files,
+        states,
+    });
 }
 
 /// A typed path with a leading `~` meaning the home folder, as a shell would read it.

@@ -196,8 +196,13 @@ pub fn picker(f: &mut Frame, area: Rect, p: &Picker, theme: &Theme) {
         .collect();
     for (k, name) in p.files.iter().enumerate() {
         let i = scenes.len() + k;
+        let what = if p.states.get(k).copied().unwrap_or(false) {
+            "a cloth's state, not a scene: start a scene from it with --from"
+        } else {
+            "scene file in this folder"
+        };
         lines.push(Line::styled(
-            format!(" {name:<name_w$}  scene file in this folder"),
+            format!(" {name:<name_w$}  {what}"),
             style(i, theme.text),
         ));
     }
