@@ -166,10 +166,36 @@ pub fn build_in(
             ),
         );
     }
+    if let Some(warning) = pins_after_resize(&app.sim.scene, &args.sets) {
+        app.say(model::Level::Warn, warning);
+    }
     if let Ok(cwd) = std::env::current_dir() {
         app.cwd = cwd;
     }
     Ok(app)
+}
+
+/// A warning when `--set` resized the grid but left the pins: they are grid indices, so they
+/// stay where the file put them (a corner of 50 points is no corner of 1000).
+fn pins_after_resize(scene: &cloth_scene::Scene, sets: &[String]) -> Option<String> {
+    let key = |s: &String| s.split('=').next().unwrap_or("").trim().to_owned();
+    let resized = sets
+        .iter()
+        .map(key)
+        .any(|k| k == "cloth.num_width_points" || k == "cloth.num_height_points");
+    let moved = sets.iter().map(key).any(|k| k.starts_with("cloth.pinned"));
+    let pins = scene.file.cloth.pinned.as_deref().unwrap_or_default();
+    if !resized || moved || pins.is_empty() {
+        return None;
+    }
+    let (w, h) = (scene.mesh.nw(), scene.mesh.nh());
+    let list: Vec<String> = pins.iter().map(|[x, y]| format!("[{x},{y}]")).collect();
+    Some(format!(
+        "the grid is now {w} x {h} points but the pins stay at the file's grid indices ({}); \
+         --set cloth.pinned=[[0,0],[{},0],...] moves them",
+        list.join(", "),
+        w - 1
+    ))
 }
 
 /// What compare mode starts with: the command line's `clothsim compare` arguments, parsed.

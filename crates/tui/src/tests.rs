@@ -1654,3 +1654,37 @@ fn the_picker_labels_a_state_file_as_a_state_not_a_scene() {
     assert!(line(&name).contains("a cloth's state"), "{shown}");
     assert!(line("mine.json").contains("scene file"), "{shown}");
 }
+
+#[test]
+fn a_grid_resized_by_set_warns_that_the_pins_keep_their_indices() {
+    let args = |sets: &[&str]| Args {
+        scene: "pinned4".to_owned(),
+        paused: true,
+        sets: sets.iter().map(|s| (*s).to_owned()).collect(),
+        ..Args::default()
+    };
+    let build = |a: &Args| {
+        build_in(
+            a,
+            &cloth_run::default_registry(),
+            false,
+            &cloth_render::ColorEnv::default(),
+        )
+        .unwrap()
+    };
+    let app = build(&args(&["cloth.num_width_points=100"]));
+    let note = app
+        .note
+        .as_ref()
+        .map(|n| n.text.clone())
+        .unwrap_or_default();
+    assert!(note.contains("100 x") && note.contains("[49,0]"), "{note}");
+    // Pins given too, or no resize: nothing to say.
+    let app = build(&args(&[
+        "cloth.num_width_points=100",
+        "cloth.pinned=[[0,0],[99,0]]",
+    ]));
+    assert!(app.note.as_ref().is_none_or(|n| !n.text.contains("pins")));
+    let app = build(&args(&["cloth.ks=100"]));
+    assert!(app.note.as_ref().is_none_or(|n| !n.text.contains("pins")));
+}
