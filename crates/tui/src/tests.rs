@@ -1688,3 +1688,18 @@ fn a_grid_resized_by_set_warns_that_the_pins_keep_their_indices() {
     let app = build(&args(&["cloth.ks=100"]));
     assert!(app.note.as_ref().is_none_or(|n| !n.text.contains("pins")));
 }
+
+#[test]
+fn the_value_prompt_shows_its_whole_hint_at_100_columns() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Enter);
+    let shown = screen(&mut app, 100, 30);
+    assert!(
+        shown.contains("type to replace, ←→ to edit; Enter accepts, Esc cancels"),
+        "{shown}"
+    );
+    type_text(&mut app, "x");
+    press(&mut app, KeyCode::Enter);
+    let shown = screen(&mut app, 100, 30);
+    assert!(shown.contains("C-w deletes a word"), "{shown}");
+}

@@ -252,14 +252,6 @@ pub fn prompt(app: &App, f: &mut Frame, area: Rect, p: &Prompt, theme: &Theme) {
         ),
         Purpose::OpenPath => ("open a scene file", "path of a scene JSON file:".to_owned()),
     };
-    let w = (question
-        .chars()
-        .count()
-        .max(p.text.chars().count() + 2)
-        .max(50)
-        + 4) as u16;
-    let h = if p.error.is_some() { 7 } else { 5 };
-    let inside = boxed(f, area, w, h + 2, title, theme.focus);
     let mut text: Vec<Span> = Vec::new();
     let chars: Vec<char> = p.text.chars().collect();
     let before: String = chars[..p.cursor.min(chars.len())].iter().collect();
@@ -285,14 +277,18 @@ pub fn prompt(app: &App, f: &mut Frame, area: Rect, p: &Prompt, theme: &Theme) {
         lines.push(Line::styled(e.clone(), theme.error));
         lines.push(Line::raw(""));
     }
-    lines.push(Line::styled(
-        if p.selected {
-            "type to replace, ←→ to edit; Enter accepts, Esc cancels"
-        } else {
-            "Enter accepts, Esc cancels; C-u clears, C-w deletes a word"
-        },
-        theme.dim,
-    ));
+    let hint = if p.selected {
+        "type to replace, ←→ to edit; Enter accepts, Esc cancels"
+    } else {
+        "Enter accepts, Esc cancels; C-u clears, C-w deletes a word"
+    };
+    lines.push(Line::styled(hint, theme.dim));
+    // The box is as wide as its longest line (the screen allowing) and as tall as its lines
+    // wrapped, so no line is cut.
+    let w = (lines.iter().map(Line::width).max().unwrap_or(0).max(50) + 4)
+        .min(usize::from(area.width)) as u16;
+    let h = rows_of(&lines, w);
+    let inside = boxed(f, area, w, h + 2, title, theme.focus);
     f.render_widget(Paragraph::new(lines).wrap(Wrap { trim: false }), inside);
 }
 
