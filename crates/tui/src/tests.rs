@@ -844,7 +844,15 @@ fn opening_a_cloth_of_more_than_250000_points_asks_first() {
     // The snapshot names the file without its temporary folder, so it is the same every run.
     let waiting = app.big.as_mut().unwrap();
     let origin = std::mem::replace(&mut waiting.origin, "big.json".to_owned());
+    let shown = screen(&mut app, 140, 44);
     insta::assert_snapshot!("big_cloth_100x30", screen(&mut app, 100, 30));
+    // The question gives the memory check's own estimate.
+    let (_, need) = super::update::scene_need(&app, app.big.as_ref().unwrap()).unwrap();
+    let figure = cloth_run::memory::human_bytes(need.total());
+    assert!(
+        shown.contains(&format!("needs about {figure}")),
+        "{figure}:\n{shown}"
+    );
     app.big.as_mut().unwrap().origin = origin;
     press(&mut app, KeyCode::Char('n'));
     assert_eq!(app.sim.scene.origin, "pinned4", "n keeps the open scene");

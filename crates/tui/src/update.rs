@@ -1207,16 +1207,26 @@ fn replace_scene(app: &mut App, scene: cloth_scene::Scene) {
 
 /// Refuses `scene` when its cloth would need more memory than the app may take (see
 /// [`cloth_run::memory::check`]), with the solver it asks for or else the default one.
-fn check_memory(app: &App, scene: &cloth_scene::Scene) -> anyhow::Result<()> {
+/// What the UI would need to run `scene` (with the solver it would get) and that solver;
+/// `None` with no solver registered. The one estimate behind the memory check and the big
+/// cloth's question.
+pub fn scene_need(
+    app: &App,
+    scene: &cloth_scene::Scene,
+) -> Option<(cloth_solver::SolverEntry, cloth_run::memory::Need)> {
     let registry = app.sim.registry();
     let (entry, options) = match cloth_run::solvers::choose(registry, scene, None) {
         Ok(choice) => (choice.entry, choice.options),
-        Err(_) => match registry.default_entry() {
-            Some(entry) => (*entry, serde_json::Value::Null),
-            None => return Ok(()),
-        },
+        Err(_) => (*registry.default_entry()?, serde_json::Value::Null),
     };
     let need = cloth_run::memory::ui_need(&entry, &options, &scene.mesh);
+    Some((entry, need))
+}
+
+fn check_memory(app: &App, scene: &cloth_scene::Scene) -> anyhow::Result<()> {
+    let Some((entry, need)) = scene_need(app, scene) else {
+        return Ok(());
+    };
     let who = cloth_run::memory::solver(&entry);
     let limit = (app.max_memory, cloth_run::memory::SMALLER_SCENE);
     cloth_run::memory::check(&scene.origin, &who, &scene.mesh, need, limit)

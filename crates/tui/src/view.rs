@@ -57,6 +57,7 @@ pub fn view(app: &App, f: &mut Frame) {
     }
 }
 
+#[cfg(test)]
 pub use compare::sig;
 
 /// Rows compare mode's table needs at `width` columns.

@@ -381,14 +381,20 @@ pub fn big(app: &App, f: &mut Frame, area: Rect, points: usize, theme: &Theme) {
         .big
         .as_ref()
         .map_or_else(String::new, |s| s.origin.clone());
-    // Positions, last positions and a copy for the screen: three vectors of 24 bytes a point,
-    // besides the springs (about six per point, 24 bytes each).
-    let mb = points as f64 * (3.0 * 24.0 + 6.0 * 24.0) / 1e6;
+    // The estimate the memory check uses: the solver's, the cloth's states and the drawing.
+    let need = app
+        .big
+        .as_ref()
+        .and_then(|s| crate::update::scene_need(app, s))
+        .map_or_else(
+            || "an unknown amount of memory".to_owned(),
+            |(_, n)| format!("about {}", cloth_run::memory::human_bytes(n.total())),
+        );
     let lines = vec![
         Line::styled(
             format!(
                 "{name} has {points} points (more than {}). It will likely run slower than \
-                 real time and needs about {mb:.0} MB; the keys still answer at once.",
+                 real time and needs {need}; the keys still answer at once.",
                 crate::update::BIG_CLOTH
             ),
             theme.text,
