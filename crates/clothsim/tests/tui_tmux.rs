@@ -571,3 +571,31 @@ fn an_explicit_colour_flag_beats_no_color() {
     t.keys(&["q"]);
     t.wait_for("the shell", ANSWER, |s| s.contains("exit=0"));
 }
+
+#[test]
+fn simulate_without_out_on_a_terminal_prints_a_summary_and_piped_prints_the_json() {
+    let Some(t) = Tmux::start("summary", 120, 30) else {
+        return;
+    };
+    let bin = env!("CARGO_BIN_EXE_clothsim");
+    t.keys(&[
+        &format!("\"{bin}\" simulate pinned4 --frames 10; echo \"exit=$?\""),
+        "Enter",
+    ]);
+    let s = t.wait_for("the summary", START, |s| {
+        s.lines().any(|l| l.starts_with("exit="))
+    });
+    assert!(s.contains("exit=0"), "{s}");
+    assert!(s.contains("pinned4: 10 frames"), "{s}");
+    assert!(s.contains("--out state.json"), "{s}");
+    assert!(!s.contains("positions"), "no JSON on the terminal:\n{s}");
+    t.keys(&["clear", "Enter"]);
+    t.keys(&[
+        &format!("\"{bin}\" simulate pinned4 --frames 10 | head -c 40; echo; echo \"done=$?\""),
+        "Enter",
+    ]);
+    let s = t.wait_for("the JSON", START, |s| {
+        s.lines().any(|l| l.starts_with("done="))
+    });
+    assert!(s.contains("{\"num_width_points\""), "{s}");
+}
