@@ -1629,11 +1629,11 @@ fn the_compare_table_keeps_every_figure_whole_and_tells_the_variants_apart() {
 fn figures_keep_four_significant_digits_and_their_exponent() {
     use super::view::sig;
     assert_eq!(sig(2.28e-6), "2.280e-6");
-    assert_eq!(sig(-0.61234), "-0.6123");
+    assert_eq!(sig(-0.612_34), "-0.6123");
     assert_eq!(sig(1.1264), "1.126");
     assert_eq!(sig(12346.0), "1.235e4");
-    assert_eq!(sig(9.99996), "10.00");
-    assert_eq!(sig(0.012345), "0.01235");
+    assert_eq!(sig(9.999_96), "10.00");
+    assert_eq!(sig(0.012_345), "0.01235");
     assert_eq!(sig(0.0), "0");
     assert_eq!(sig(f64::NAN), "-");
 }
