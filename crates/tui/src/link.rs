@@ -68,6 +68,8 @@ pub struct Pacer {
     rate: Option<f64>,
     /// The link's latency: the shortest round trip of a frame too small to load the link.
     latency: Option<Duration>,
+    /// The last answer's round trip.
+    last_trip: Option<Duration>,
     /// `--max-rate`, bytes per second.
     cap: Option<f64>,
     /// The cap's token bucket: bytes that may be written now (negative: owed).
@@ -92,6 +94,7 @@ impl Pacer {
             first: None,
             rate: None,
             latency: None,
+            last_trip: None,
             cap: cap.map(|c| c as f64),
             tokens: 0.0,
             refilled: None,
@@ -196,6 +199,7 @@ impl Pacer {
             return;
         };
         let trip = now.saturating_duration_since(q.sent).max(QUICKEST);
+        self.last_trip = Some(trip);
         if q.bytes < SMALLEST {
             self.latency = Some(self.latency.map_or(trip, |s| s.min(trip)));
         }
@@ -250,6 +254,14 @@ impl Pacer {
     /// Status queries written and not answered (none once the terminal is found silent).
     pub fn in_flight(&self) -> usize {
         if self.silent { 0 } else { self.queries.len() }
+    }
+
+    /// How long the answers in flight may still take: a few of the last round trips, from
+    /// 20 ms to half a second (keys typed meanwhile are read and dropped, so it stays short).
+    pub fn settle_time(&self) -> Duration {
+        self.last_trip.map_or(Duration::from_millis(500), |t| {
+            (t * 4).clamp(Duration::from_millis(20), Duration::from_millis(500))
+        })
     }
 
     /// Whether the terminal was found not to answer status queries.

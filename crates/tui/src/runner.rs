@@ -73,13 +73,14 @@ pub fn run(mut app: App, fps: u32, max_rate: Option<u64>) -> anyhow::Result<()> 
         TerminalGuard::enter(app.mouse, sixteen).context("cannot set up the terminal")?;
     spawn_input(tx).context("cannot read the keyboard")?;
     let mut pacer = Pacer::new(max_rate);
-    let end = event_loop(&mut guard, &mut app, (fps, &mut pacer), &rx);
+    let mut decoder = Decoder::new();
+    let end = event_loop(&mut guard, &mut app, (fps, &mut pacer, &mut decoder), &rx);
     // A recording ends with the UI, kept as far as it went.
     let recorded = app.stop_recording();
     // The screen goes back at once; raw mode stays until the answers to the queries still
     // in flight are in, or they would be typed into the shell.
     guard.leave_screen();
-    settle(&rx, &mut pacer);
+    settle(&rx, &mut pacer, &mut decoder);
     guard.leave();
     drop(guard);
     signals.close();
@@ -164,7 +165,7 @@ impl Meter {
 fn event_loop(
     guard: &mut TerminalGuard,
     app: &mut App,
-    (fps, pacer): (u32, &mut Pacer),
+    (fps, pacer, decoder): (u32, &mut Pacer, &mut Decoder),
     rx: &Receiver<Wake>,
 ) -> anyhow::Result<End> {
     let interval = Duration::from_secs_f64(1.0 / f64::from(fps));
@@ -176,7 +177,6 @@ fn event_loop(
             height: size.height,
         },
     );
-    let mut decoder = Decoder::new();
     let mut dirty = true;
     // A key's answer is drawn at once, not at the next frame slot (which at `--fps 1` is up
     // to a second away); only the cloth's motion waits for its slot.
@@ -219,7 +219,7 @@ fn event_loop(
                 }
                 Wake::Signal(sig) => match signals::meaning(sig) {
                     signals::Meaning::Stop => {
-                        suspend(guard, rx, pacer)?;
+                        suspend(guard, rx, pacer, decoder)?;
                         dirty = true;
                         urgent = true;
                     }
@@ -261,7 +261,7 @@ fn event_loop(
         app.sync();
         if app.suspend {
             app.suspend = false;
-            suspend(guard, rx, pacer)?;
+            suspend(guard, rx, pacer, decoder)?;
             dirty = true;
             urgent = true;
         }
@@ -341,14 +341,11 @@ fn event_loop(
     }
 }
 
-/// Longest wait for the answers to the status queries in flight when the UI leaves.
-const SETTLE: Duration = Duration::from_millis(500);
-
-/// Waits (at most [`SETTLE`]) for the answers to the status queries still in flight, so that
-/// none reaches the shell as typed text once raw mode is off; returns what else arrived.
-fn settle(rx: &Receiver<Wake>, pacer: &mut Pacer) -> Vec<Wake> {
-    let deadline = Instant::now() + SETTLE;
-    let mut decoder = Decoder::new();
+/// Waits (at most [`Pacer::settle_time`]) for the answers to the status queries still in
+/// flight, so that none reaches the shell as typed text once raw mode is off; returns what
+/// else arrived. `decoder` is the loop's, which may hold the start of an answer.
+fn settle(rx: &Receiver<Wake>, pacer: &mut Pacer, decoder: &mut Decoder) -> Vec<Wake> {
+    let deadline = Instant::now() + pacer.settle_time();
     let mut others = Vec::new();
     while pacer.in_flight() > 0 {
         let Some(left) = deadline.checked_duration_since(Instant::now()) else {
@@ -374,11 +371,12 @@ fn suspend(
     guard: &mut TerminalGuard,
     rx: &Receiver<Wake>,
     pacer: &mut Pacer,
+    decoder: &mut Decoder,
 ) -> anyhow::Result<()> {
     guard.leave_screen();
     // What arrives meanwhile (a snapshot, a signal) is of no use to a stopped process but a
     // terminating signal, which ends it now.
-    for wake in settle(rx, pacer) {
+    for wake in settle(rx, pacer, decoder) {
         if let Wake::Signal(sig) = wake
             && matches!(signals::meaning(sig), signals::Meaning::End)
         {
