@@ -149,6 +149,11 @@ enum FarEnd {
 
 impl Link {
     fn start(args: &[&str], width: u16, height: u16, end: FarEnd) -> Self {
+        Self::start_at(RATE, args, width, height, end)
+    }
+
+    /// As [`Self::start`], the far end taking `rate` bytes a second.
+    fn start_at(rate: usize, args: &[&str], width: u16, height: u16, end: FarEnd) -> Self {
         let size = Winsize {
             ws_row: height,
             ws_col: width,
@@ -211,7 +216,7 @@ impl Link {
             let far = Arc::clone(&far);
             std::thread::spawn(move || {
                 let tick = Duration::from_millis(5);
-                let per_tick = RATE * 5 / 1000;
+                let per_tick = rate * 5 / 1000;
                 let start = Instant::now();
                 let mut ticks = 0u32;
                 loop {
@@ -436,4 +441,39 @@ fn in_tmux_over_16_kb_per_second_space_shows_paused_within_300_ms() {
     });
     eprintln!("PAUSED in tmux after {paused:?}");
     assert!(paused <= ANSWER, "PAUSED after {paused:?}");
+}
+
+#[test]
+#[ignore = "reads the drawing rate of a running binary: run in release (CI's ignored suite)"]
+fn the_drawing_rate_never_exceeds_fps_on_a_fast_link() {
+    let mut link = Link::start_at(
+        64 * 1024 * 1024,
+        &["pinned4", "--fps", "10"],
+        120,
+        40,
+        FarEnd::Model,
+    );
+    link.wait("UI", Duration::from_secs(60), |f| {
+        f.row(0).contains("RUNNING")
+    });
+    // Keys are drawn at once, between the frames' slots; the header's rate, measured each
+    // second, must stay within --fps all the same.
+    let rates: Vec<f64> = (0..4)
+        .map(|_| {
+            for _ in 0..3 {
+                sleep(Duration::from_millis(370));
+                link.key(b"j");
+            }
+            let row = link.far.lock().unwrap().row(0);
+            let fps = row
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .windows(2)
+                .find(|w| w[1] == "fps")
+                .and_then(|w| w[0].parse().ok());
+            fps.unwrap_or_else(|| panic!("no fps in the header: {row}"))
+        })
+        .collect();
+    assert!(rates.iter().all(|&r| r <= 10.0), "{rates:?}");
+    link.key(b"q");
 }
