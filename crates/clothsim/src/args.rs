@@ -94,7 +94,7 @@ pub struct UiArgs {
     pub mode: Mode,
     /// Start from a state that `simulate` wrote (its positions and last positions, so the
     /// cloth keeps its velocity) instead of the scene's flat start; its grid and pins must be
-    /// the scene's. The clock goes on from the state's time; R still resets to the flat start.
+    /// the scene's. The clock goes on from the state's time; r resets to the scene's flat start.
     #[arg(long, value_name = "STATE.json", value_hint = clap::ValueHint::FilePath)]
     pub from: Option<std::path::PathBuf>,
     /// Most memory a cloth may take (e.g. 512M, 4G; powers of 1024): a scene whose solver,
@@ -102,6 +102,11 @@ pub struct UiArgs {
     /// memory the system has available.
     #[arg(long, value_name = "SIZE", value_parser = cloth_run::memory::parse_size)]
     pub max_memory: Option<u64>,
+    /// Most bytes per second written to the terminal (e.g. 16K; powers of 1024): drawing
+    /// slows down to fit, the simulation does not. Without it the UI measures what the
+    /// terminal takes and keeps about one frame in flight.
+    #[arg(long, value_name = "BYTES_PER_SEC", value_parser = cloth_run::memory::parse_size)]
+    pub max_rate: Option<u64>,
 }
 
 impl Default for UiArgs {
@@ -118,6 +123,7 @@ impl Default for UiArgs {
             mode: Mode::Ascii,
             from: None,
             max_memory: None,
+            max_rate: None,
         }
     }
 }
@@ -137,6 +143,7 @@ impl UiArgs {
             mode: self.mode,
             from: self.from.clone(),
             max_memory: self.max_memory,
+            max_rate: self.max_rate,
         }
     }
 }

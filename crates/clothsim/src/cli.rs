@@ -91,7 +91,7 @@ enum Command {
     /// Read it with `clothsim man | man -l -`.
     Man {
         /// Write clothsim.1 and one page per command (clothsim-render.1, ...) into this folder
-        /// instead.
+        /// instead (made when missing).
         #[arg(long, value_name = "DIR", value_hint = clap::ValueHint::DirPath)]
         dir: Option<PathBuf>,
     },
@@ -113,6 +113,9 @@ impl Cli {
             Some(Command::Completions { shell }) => print(&completions(registry, program, shell)),
             Some(Command::Man { dir: None }) => print(&man_page(registry, program)?),
             Some(Command::Man { dir: Some(dir) }) => {
+                // The folder is made when missing: the pages are all that goes in it.
+                std::fs::create_dir_all(&dir)
+                    .with_context(|| format!("{}: cannot create the folder", dir.display()))?;
                 clap_mangen::generate_to(command(registry, program), &dir)
                     .with_context(|| format!("{}: cannot write the manual pages", dir.display()))
             }

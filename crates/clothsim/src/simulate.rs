@@ -316,11 +316,44 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             let _ = writeln!(std::io::stderr(), "{program}: note: {note}");
         }
         Ok(())
+    } else if output::Stdout::is_terminal() {
+        // Pages of coordinates help no one on a terminal: a summary, and how to get them.
+        let end = StatsRow::measure(
+            &scene.mesh,
+            state,
+            point_mass,
+            params.dt(),
+            start_frames + done,
+            start_time + done as f64 / params.frames_per_sec,
+            u64::from(params.steps_per_frame),
+            None,
+        );
+        let text = summary(&scene.origin, choice.entry.name(), &end, scene.mesh.len());
+        let mut out = output::Stdout::new();
+        out.write_all_or_fail(text.as_bytes())?;
+        out.finish()
     } else {
         let mut out = output::Stdout::new();
         out.write_all_or_fail(&bytes)?;
         out.finish()
     }
+}
+
+/// What `simulate` without `--out` prints on a terminal: where the cloth ended, and how to get
+/// the state itself.
+fn summary(origin: &str, solver: &str, end: &StatsRow, points: usize) -> String {
+    format!(
+        "{origin}: {} frames ({:.3} s) with {solver}\n  centre height {:.6} m, lowest point \
+         {:.6} m, largest stretch {:.4}, kinetic energy {:.4e} J\n\
+         The final state ({points} points) is JSON: write it with --out state.json (or .obj), \
+         or pipe it (clothsim simulate ... | jq .); --stats FILE writes the numbers per frame.\n",
+        end.frame,
+        end.time_s,
+        end.centre_y_m,
+        end.lowest_y_m,
+        end.max_stretch,
+        end.kinetic_energy_j
+    )
 }
 
 /// `simulate --vary`: every variant in lockstep, one output per variant beside `--out`, the

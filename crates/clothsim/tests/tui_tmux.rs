@@ -18,10 +18,11 @@ const START: u64 = 60;
 const ANSWER: u64 = 15;
 
 /// What tmux reports of the terminal while the UI runs: alternate screen on, cursor hidden,
-/// mouse tracked.
-const UI_MODES: &str = "1 0 1";
+/// presses and drags reported, and not every motion of the pointer (mode 1003 would send a
+/// report for each cell crossed).
+const UI_MODES: &str = "1 0 1 0";
 /// ... and what a shell expects: alternate screen off, cursor shown, no mouse tracking.
-const SHELL_MODES: &str = "0 1 0";
+const SHELL_MODES: &str = "0 1 0 0";
 
 /// A private tmux server (its own socket) with one pane running `sh`, killed when the test
 /// ends however it ends.
@@ -78,14 +79,15 @@ impl Tmux {
         String::from_utf8_lossy(&o.stdout).into_owned()
     }
 
-    /// The terminal's modes as tmux sees them: `alternate_on cursor_flag mouse_any_flag`.
+    /// The terminal's modes as tmux sees them: `alternate_on cursor_flag mouse_button_flag
+    /// mouse_all_flag` (1003: every motion).
     fn modes(&self) -> String {
         let o = self.run(&[
             "display",
             "-p",
             "-t",
             "e2e",
-            "#{alternate_on} #{cursor_flag} #{mouse_any_flag}",
+            "#{alternate_on} #{cursor_flag} #{mouse_button_flag} #{mouse_all_flag}",
         ]);
         String::from_utf8_lossy(&o.stdout).trim().to_owned()
     }
@@ -141,10 +143,15 @@ impl Tmux {
     /// Starts clothsim with `args` in the pane, its pid written to a file, and the exit
     /// status echoed when it ends; waits for the UI.
     fn clothsim(&self, args: &str) -> u32 {
+        self.clothsim_with("", args)
+    }
+
+    /// As [`Self::clothsim`], with environment assignments `env` (`NAME=VALUE ...`).
+    fn clothsim_with(&self, env: &str, args: &str) -> u32 {
         let bin = env!("CARGO_BIN_EXE_clothsim");
         self.keys(&["clear", "Enter"]);
         self.keys(&[
-            &format!("sh -c 'echo $$ > pid; exec \"{bin}\" {args}'; echo \"exit=$?\""),
+            &format!("sh -c 'echo $$ > pid; exec env {env} \"{bin}\" {args}'; echo \"exit=$?\""),
             "Enter",
         ]);
         self.wait_for("the UI", START, |s| s.contains("parameters"));
@@ -538,8 +545,57 @@ fn r_records_the_screen_to_a_cast_file_named_in_the_status_line() {
         "times in order"
     );
     assert!(events[0].2.contains("REC pinned4.cast"));
+    // Events hold what changed: played back in the terminal, as `asciinema play` would,
+    // they leave the stepped frame on screen.
+    let played: String = events.iter().map(|e| e.2.as_str()).collect();
+    std::fs::write(t.dir.path().join("played"), played).unwrap();
+    t.keys(&["clear; cat played; sleep 5", "Enter"]);
+    t.wait_for("the recording played back", ANSWER, |s| {
+        s.contains("t 0.011 s") && s.contains("REC pinned4.cast")
+    });
+}
+
+#[test]
+fn an_explicit_colour_flag_beats_no_color() {
+    let Some(t) = Tmux::start("nocolor", 100, 30) else {
+        return;
+    };
+    t.clothsim_with("NO_COLOR=1", "tui pinned4 --paused --color 256");
+    // The pane's cells with their colours as escapes: the cloth's glyphs are coloured.
+    let o = t.run(&["capture-pane", "-p", "-e", "-t", "e2e"]);
+    let s = String::from_utf8_lossy(&o.stdout);
     assert!(
-        events.iter().any(|e| e.2.contains("t 0.011 s")),
-        "the stepped frame is in the recording"
+        s.contains("38;5;"),
+        "no 256-colour foreground on screen:\n{s}"
     );
+    t.keys(&["q"]);
+    t.wait_for("the shell", ANSWER, |s| s.contains("exit=0"));
+}
+
+#[test]
+fn simulate_without_out_on_a_terminal_prints_a_summary_and_piped_prints_the_json() {
+    let Some(t) = Tmux::start("summary", 120, 30) else {
+        return;
+    };
+    let bin = env!("CARGO_BIN_EXE_clothsim");
+    t.keys(&[
+        &format!("\"{bin}\" simulate pinned4 --frames 10; echo \"exit=$?\""),
+        "Enter",
+    ]);
+    let s = t.wait_for("the summary", START, |s| {
+        s.lines().any(|l| l.starts_with("exit="))
+    });
+    assert!(s.contains("exit=0"), "{s}");
+    assert!(s.contains("pinned4: 10 frames"), "{s}");
+    assert!(s.contains("--out state.json"), "{s}");
+    assert!(!s.contains("positions"), "no JSON on the terminal:\n{s}");
+    t.keys(&["clear", "Enter"]);
+    t.keys(&[
+        &format!("\"{bin}\" simulate pinned4 --frames 10 | head -c 40; echo; echo \"done=$?\""),
+        "Enter",
+    ]);
+    let s = t.wait_for("the JSON", START, |s| {
+        s.lines().any(|l| l.starts_with("done="))
+    });
+    assert!(s.contains("{\"num_width_points\""), "{s}");
 }

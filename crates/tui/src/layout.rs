@@ -11,6 +11,9 @@ pub const MIN_WIDTH: u16 = 60;
 /// The smallest terminal the layout fits, rows.
 pub const MIN_HEIGHT: u16 = 16;
 
+/// Fewest rows a compare pane is drawn in (its border and three rows of cloth).
+const MIN_PANE: u16 = 5;
+
 /// The screen's regions.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Regions {
@@ -95,16 +98,24 @@ pub fn regions(app: &App, area: Rect) -> Option<Regions> {
         let n = c.len();
         let columns = c.columns.clamp(1, n);
         let rows = n.div_ceil(columns);
-        let table_h = (n as u16 + 3).min(views.height / 2);
-        let r = Split::vertical([Constraint::Min(1), Constraint::Length(table_h)]).split(views);
-        let row_rects = Split::vertical(vec![Constraint::Ratio(1, rows as u32); rows]).split(r[0]);
+        // The figures first: the table takes the rows it needs, and the panes go when what
+        // is left gives each fewer than MIN_PANE rows.
+        let table_h = super::view::compare_table_height(app, views.width).min(views.height);
+        let mut r = Split::vertical([Constraint::Min(0), Constraint::Length(table_h)]).split(views);
         let mut variants = Vec::with_capacity(n);
-        for row_rect in row_rects.iter() {
-            let cells = Split::horizontal(vec![Constraint::Ratio(1, columns as u32); columns])
-                .split(*row_rect);
-            variants.extend(cells.iter().copied());
+        if r[0].height / rows as u16 >= MIN_PANE {
+            let row_rects =
+                Split::vertical(vec![Constraint::Ratio(1, rows as u32); rows]).split(r[0]);
+            for row_rect in row_rects.iter() {
+                let cells = Split::horizontal(vec![Constraint::Ratio(1, columns as u32); columns])
+                    .split(*row_rect);
+                variants.extend(cells.iter().copied());
+            }
+            variants.truncate(n);
+        } else {
+            r = Split::vertical([Constraint::Min(0), Constraint::Length(views.height)])
+                .split(views);
         }
-        variants.truncate(n);
         return Some(Regions {
             title,
             panes: Vec::new(),

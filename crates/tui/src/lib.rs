@@ -3,24 +3,27 @@
 //!
 //! Elm architecture: a model ([`App`]), messages ([`Message`]), one [`update()`] function that
 //! changes the model, and a pure [`view()`]. Terminal events become messages in `input`
-//! (after `escape` joins split escape sequences); the one `keymap::KEYMAP` dispatches keys
+//! (after `decode` has read them from the terminal's bytes); the one `keymap::KEYMAP` dispatches keys
 //! and generates the footer and the help; the one `params::PARAMS` table drives the
 //! parameter panel. The cloth steps on its own thread, a `cloth_run::lockstep::Lockstep` of
 //! one that owns the simulation clock (compare mode's variants on one lockstep of them all);
 //! the loop in `runner` waits on one channel for keys, signals and the lockstep's snapshots,
-//! answers each at once and draws at most `--fps` times a second.
+//! answers each at once and draws at most `--fps` times a second, paced by what the terminal
+//! has taken (`link`) and written as the cells that changed (`screen`).
 
 mod compare;
-mod escape;
+mod decode;
 mod input;
 mod keymap;
 mod layout;
+mod link;
 mod message;
 mod model;
 mod panes;
 mod params;
 mod recording;
 mod runner;
+mod screen;
 mod sgr;
 mod terminal;
 mod theme;
@@ -70,12 +73,15 @@ pub struct Args {
     pub mode: Mode,
     /// Start from a state that `simulate` wrote (its positions and last positions, so the
     /// cloth keeps its velocity) instead of the scene's flat start; its grid and pins must be
-    /// the scene's. The clock goes on from the state's time; R still resets to the flat start.
+    /// the scene's. The clock goes on from the state's time; r resets to the scene's flat start.
     pub from: Option<std::path::PathBuf>,
     /// Most memory a cloth may take (e.g. 512M, 4G; powers of 1024): a scene whose solver,
     /// states and frames would need more is refused, at start and when opened. Default: the
     /// memory the system has available.
     pub max_memory: Option<u64>,
+    /// Most bytes per second written to the terminal; drawing slows down to fit, the
+    /// simulation does not. Without it drawing is paced by what the terminal has taken.
+    pub max_rate: Option<u64>,
 }
 
 impl Default for Args {
@@ -92,6 +98,7 @@ impl Default for Args {
             mode: Mode::Ascii,
             from: None,
             max_memory: None,
+            max_rate: None,
         }
     }
 }
@@ -157,10 +164,36 @@ pub fn build_in(
             ),
         );
     }
+    if let Some(warning) = pins_after_resize(&app.sim.scene, &args.sets) {
+        app.say(model::Level::Warn, warning);
+    }
     if let Ok(cwd) = std::env::current_dir() {
         app.cwd = cwd;
     }
     Ok(app)
+}
+
+/// A warning when `--set` resized the grid but left the pins: they are grid indices, so they
+/// stay where the file put them (a corner of 50 points is no corner of 1000).
+fn pins_after_resize(scene: &cloth_scene::Scene, sets: &[String]) -> Option<String> {
+    let key = |s: &String| s.split('=').next().unwrap_or("").trim().to_owned();
+    let resized = sets
+        .iter()
+        .map(key)
+        .any(|k| k == "cloth.num_width_points" || k == "cloth.num_height_points");
+    let moved = sets.iter().map(key).any(|k| k.starts_with("cloth.pinned"));
+    let pins = scene.file.cloth.pinned.as_deref().unwrap_or_default();
+    if !resized || moved || pins.is_empty() {
+        return None;
+    }
+    let (w, h) = (scene.mesh.nw(), scene.mesh.nh());
+    let list: Vec<String> = pins.iter().map(|[x, y]| format!("[{x},{y}]")).collect();
+    Some(format!(
+        "the grid is now {w} x {h} points but the pins stay at the file's grid indices ({}); \
+         --set cloth.pinned=[[0,0],[{},0],...] moves them",
+        list.join(", "),
+        w - 1
+    ))
 }
 
 /// What compare mode starts with: the command line's `clothsim compare` arguments, parsed.
@@ -325,7 +358,7 @@ pub fn run_compare(args: &CompareArgs, registry: &Registry) -> anyhow::Result<()
         );
     }
     let app = build_compare_in(args, registry, true, &env)?;
-    runner::run(app, args.ui.fps)
+    runner::run(app, args.ui.fps, args.ui.max_rate)
 }
 
 /// Runs the live UI until the user quits.
@@ -351,5 +384,5 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         );
     }
     let app = build_in(args, registry, true, &env)?;
-    runner::run(app, args.fps)
+    runner::run(app, args.fps, args.max_rate)
 }

@@ -156,6 +156,8 @@ pub struct Picker {
     pub selected: usize,
     /// `*.json` files in the working folder, sorted by name.
     pub files: Vec<String>,
+    /// Which of [`Self::files`] are state files (`simulate`'s output, for `--from`), not scenes.
+    pub states: Vec<bool>,
 }
 
 impl Picker {
@@ -174,6 +176,8 @@ pub struct Stats {
     pub draws_per_sec: f64,
     /// Wall time per drawn frame (render + draw + write), ms.
     pub draw_ms: f64,
+    /// Whether the terminal (or `--max-rate`) held drawing back, and the bytes written.
+    pub link: crate::link::Measure,
 }
 
 /// What to show in each pane slot at start: side and top first (the two-pane default).
@@ -254,6 +258,8 @@ pub struct App {
     pub drag: Option<(u16, u16)>,
     /// Set by quit.
     pub quit: bool,
+    /// What a save asked for from the quit or open dialog goes on to once the file is written.
+    pub after_save: Option<Then>,
     /// Set by Ctrl-Z: the loop suspends the app (and clears it).
     pub suspend: bool,
     /// Whether the mouse is captured (wheel and drag work; the terminal cannot select text).
@@ -325,6 +331,7 @@ impl App {
             renderer: Renderer::new(),
             drag: None,
             quit: false,
+            after_save: None,
             cwd: PathBuf::from("."),
             max_memory: None,
             compare: None,

@@ -8,18 +8,23 @@
 use std::io::{self, Write};
 
 use ratatui::Terminal;
-use ratatui::backend::CrosstermBackend;
 use ratatui::crossterm::cursor::{Hide, Show};
-use ratatui::crossterm::event::{DisableMouseCapture, EnableMouseCapture};
 use ratatui::crossterm::execute;
 use ratatui::crossterm::terminal::{
     EnterAlternateScreen, LeaveAlternateScreen, disable_raw_mode, enable_raw_mode,
 };
 
-use super::sgr::Sgr16;
+use super::screen::Screen;
 
 /// The terminal the UI draws on.
-pub type Term = Terminal<CrosstermBackend<Sgr16<io::Stdout>>>;
+pub type Term = Terminal<Screen<io::Stdout>>;
+
+/// Mouse reports of presses, releases and drags (1000, 1002), in SGR form (1006); not every
+/// motion (1003), which would send a report for each cell the pointer crosses.
+const MOUSE_ON: &[u8] = b"\x1b[?1000h\x1b[?1002h\x1b[?1006h";
+
+/// Every mouse mode off, including those other programs may have left on.
+const MOUSE_OFF: &[u8] = b"\x1b[?1006l\x1b[?1015l\x1b[?1003l\x1b[?1002l\x1b[?1000l";
 
 /// An entered terminal.
 pub struct TerminalGuard {
@@ -33,7 +38,9 @@ pub struct TerminalGuard {
 /// a closed terminal they all do).
 pub fn restore_terminal() {
     let mut out = io::stdout();
-    let _ = execute!(out, DisableMouseCapture, LeaveAlternateScreen, Show);
+    let _ = out.write_all(MOUSE_OFF);
+    let _ = out.write_all(b"\x1b[0m");
+    let _ = execute!(out, LeaveAlternateScreen, Show);
     let _ = disable_raw_mode();
     let _ = out.flush();
 }
@@ -52,7 +59,8 @@ fn enter(mouse: bool) -> io::Result<()> {
     let mut out = io::stdout();
     execute!(out, EnterAlternateScreen, Hide)?;
     if mouse {
-        execute!(out, EnableMouseCapture)?;
+        out.write_all(MOUSE_ON)?;
+        out.flush()?;
     }
     Ok(())
 }
@@ -68,7 +76,7 @@ impl TerminalGuard {
             restore_terminal();
             return Err(e);
         }
-        let backend = CrosstermBackend::new(Sgr16::new(io::stdout(), sixteen));
+        let backend = Screen::new(io::stdout(), sixteen);
         match Terminal::new(backend) {
             Ok(terminal) => Ok(Self {
                 terminal,
@@ -79,6 +87,18 @@ impl TerminalGuard {
                 restore_terminal();
                 Err(e)
             }
+        }
+    }
+
+    /// Puts the shell's screen back (the alternate screen left, the cursor shown, the mouse
+    /// freed) but stays in raw mode, so that what the terminal still sends is read, not echoed.
+    pub fn leave_screen(&mut self) {
+        if self.entered {
+            let mut out = io::stdout();
+            let _ = out.write_all(MOUSE_OFF);
+            let _ = out.write_all(b"\x1b[0m");
+            let _ = execute!(out, LeaveAlternateScreen, Show);
+            let _ = out.flush();
         }
     }
 
@@ -97,9 +117,7 @@ impl TerminalGuard {
     pub fn resume(&mut self) -> io::Result<()> {
         enter(self.mouse)?;
         self.entered = true;
-        // NOTE: `Terminal::clear` asks the terminal where its cursor is, and the answer would
-        // be read by the input thread instead; a resize to the current size clears the screen
-        // and forgets what was drawn without asking.
+        // A resize to the current size clears the screen and forgets what was drawn.
         let size = self.terminal.size()?;
         self.terminal
             .resize(ratatui::layout::Rect::new(0, 0, size.width, size.height))
@@ -112,11 +130,9 @@ impl TerminalGuard {
     pub fn set_mouse(&mut self, on: bool) -> io::Result<()> {
         if on != self.mouse {
             self.mouse = on;
-            if on {
-                execute!(io::stdout(), EnableMouseCapture)?;
-            } else {
-                execute!(io::stdout(), DisableMouseCapture)?;
-            }
+            let mut out = io::stdout();
+            out.write_all(if on { MOUSE_ON } else { MOUSE_OFF })?;
+            out.flush()?;
         }
         Ok(())
     }

@@ -34,6 +34,44 @@ fn app_with(scene: &str, paused: bool) -> App {
     app
 }
 
+/// An app whose cloth is coloured as `--color choice` colours it on a terminal.
+pub(crate) fn coloured_app(scene: &str, choice: cloth_render::ColorChoice) -> App {
+    let args = Args {
+        scene: scene.to_owned(),
+        color: choice,
+        ..Args::default()
+    };
+    let env = cloth_render::ColorEnv {
+        term: Some("xterm-256color".to_owned()),
+        colorterm: Some("truecolor".to_owned()),
+        ..cloth_render::ColorEnv::default()
+    };
+    let mut app = build_in(&args, &cloth_run::default_registry(), true, &env).unwrap();
+    app.cwd = PathBuf::from("/nonexistent");
+    app
+}
+
+/// Steps the app's simulation by one frame, as the worker would.
+pub(crate) fn step_frame(app: &mut App) {
+    let dt = 1.0 / app.sim.settings.params.frames_per_sec;
+    update(app, Message::Tick(Duration::from_secs_f64(dt)));
+    update::run_owed(app, &mut || true);
+}
+
+/// The app's screen at `w` x `h` as the buffer the view draws.
+pub(crate) fn buffer_of(app: &mut App, w: u16, h: u16) -> ratatui::buffer::Buffer {
+    update(
+        app,
+        Message::Resize {
+            width: w,
+            height: h,
+        },
+    );
+    panes::prepare(app, Rect::new(0, 0, w, h));
+    let mut t = Terminal::new(TestBackend::new(w, h)).unwrap();
+    t.draw(|f| view(app, f)).unwrap().buffer.clone()
+}
+
 /// Sends a key through the real input mapping, as the loop does.
 fn press(app: &mut App, code: KeyCode) {
     press_with(app, code, KeyModifiers::NONE);
@@ -838,7 +876,15 @@ fn opening_a_cloth_of_more_than_250000_points_asks_first() {
     // The snapshot names the file without its temporary folder, so it is the same every run.
     let waiting = app.big.as_mut().unwrap();
     let origin = std::mem::replace(&mut waiting.origin, "big.json".to_owned());
+    let shown = screen(&mut app, 140, 44);
     insta::assert_snapshot!("big_cloth_100x30", screen(&mut app, 100, 30));
+    // The question gives the memory check's own estimate.
+    let (_, need) = super::update::scene_need(&app, app.big.as_ref().unwrap()).unwrap();
+    let figure = cloth_run::memory::human_bytes(need.total());
+    assert!(
+        shown.contains(&format!("needs about {figure}")),
+        "{figure}:\n{shown}"
+    );
     app.big.as_mut().unwrap().origin = origin;
     press(&mut app, KeyCode::Char('n'));
     assert_eq!(app.sim.scene.origin, "pinned4", "n keeps the open scene");
@@ -978,9 +1024,16 @@ fn the_record_key_records_the_screen_named_in_the_status_line_until_pressed_agai
         t.backend().buffer().clone()
     };
     let start = std::time::Instant::now();
+    // Half a second later the clock in the header has moved on: the second event holds it.
+    update(&mut app, Message::TogglePause);
+    step_frame(&mut app);
+    let later = buffer_of(&mut app, 100, 30);
     let rec = app.recording.as_mut().unwrap();
     rec.frame(&buffer, start).unwrap();
-    rec.frame(&buffer, start + std::time::Duration::from_millis(500))
+    rec.frame(&later, start + std::time::Duration::from_millis(500))
+        .unwrap();
+    // A draw that changed nothing is no event.
+    rec.frame(&later, start + std::time::Duration::from_millis(600))
         .unwrap();
     press(&mut app, KeyCode::Char('R'));
     assert!(app.recording.is_none());
@@ -996,7 +1049,18 @@ fn the_record_key_records_the_screen_named_in_the_status_line_until_pressed_agai
         lines.map(|l| serde_json::from_str(l).unwrap()).collect();
     assert_eq!(events.iter().map(|e| e.0).collect::<Vec<_>>(), [0.0, 0.5]);
     assert!(events[0].2.contains("REC pinned4.cast"));
-    assert_eq!(events[0].2.matches("\r\n").count(), 29, "30 rows");
+    // The first event draws the whole screen; the second only what changed.
+    assert!(
+        events[0].2.starts_with("\u{1b}[2J"),
+        "{:?}",
+        &events[0].2[..20]
+    );
+    assert!(
+        events[1].2.len() * 4 < events[0].2.len(),
+        "{} vs {}",
+        events[1].2.len(),
+        events[0].2.len()
+    );
 }
 
 #[test]
@@ -1203,13 +1267,7 @@ fn snapshot_compare_three_stiffnesses() {
     // In lockstep: the same simulated time for each.
     assert!(sims.iter().all(|s| s.steps == sims[0].steps && s.steps > 0));
     let screen = screen(&mut app, 160, 48);
-    for needle in [
-        "ks=1 ",
-        "ks=5000",
-        "ks=100000",
-        "centre height",
-        "1,5000,100000",
-    ] {
+    for needle in ["ks=1 ", "ks=5000", "ks=100000", "centre m", "1,5000,100000"] {
         assert!(screen.contains(needle), "{needle} in:\n{screen}");
     }
     insta::assert_snapshot!("compare_ks_160x48", screen);
@@ -1485,4 +1543,203 @@ fn a_solver_switch_in_the_ui_keeps_the_falling_cloths_kinetic_energy() {
         (after / before - 1.0).abs() < 0.05,
         "{after} J after the switch, {before} J under verlet"
     );
+}
+
+#[test]
+fn s_in_the_quit_dialog_saves_then_quits_and_esc_from_its_prompt_does_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    press(&mut app, KeyCode::Right);
+    press(&mut app, KeyCode::Char('q'));
+    press(&mut app, KeyCode::Char('S'));
+    // Esc from the file name keeps the app: nothing saved, no quit.
+    press(&mut app, KeyCode::Esc);
+    assert!(!app.quit);
+    // A save begun from the main screen does not quit either.
+    press(&mut app, KeyCode::Char('S'));
+    press(&mut app, KeyCode::Enter);
+    assert!(!app.quit, "S from the main screen only saves");
+    press(&mut app, KeyCode::Right);
+    press(&mut app, KeyCode::Char('q'));
+    press(&mut app, KeyCode::Char('S'));
+    press(&mut app, KeyCode::Enter);
+    // The file exists: overwrite it, and then the quit goes through.
+    assert!(matches!(app.overlay, Overlay::ConfirmOverwrite(_)));
+    press(&mut app, KeyCode::Char('y'));
+    let saved = cloth_scene::load(
+        &dir.path().join("pinned4-edited.json").to_string_lossy(),
+        &[],
+    )
+    .unwrap();
+    assert_eq!(saved.params, app.sim.settings.params);
+    assert!(app.quit, "S in the quit dialog saves and quits");
+}
+
+#[test]
+fn the_help_scrolls_no_further_than_its_last_row() {
+    let mut app = app_with("pinned4", true);
+    let _ = screen(&mut app, 60, 24);
+    press(&mut app, KeyCode::Char('?'));
+    let top = screen(&mut app, 60, 24);
+    for _ in 0..100 {
+        press(&mut app, KeyCode::Down);
+    }
+    let bottom = screen(&mut app, 60, 24);
+    assert_ne!(top, bottom, "the help scrolls at 60 x 24");
+    // One step back up shows the row above at once.
+    press(&mut app, KeyCode::Up);
+    let back = screen(&mut app, 60, 24);
+    assert_ne!(back, bottom, "one press up scrolls back");
+}
+
+#[test]
+fn s_saves_only_what_the_scene_gave_or_the_user_edited() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut app = app_with("drape", true);
+    app.cwd = dir.path().to_owned();
+    press(&mut app, KeyCode::Right); // ks up one step
+    press(&mut app, KeyCode::Char('S'));
+    press(&mut app, KeyCode::Enter);
+    let path = dir.path().join("drape-edited.json");
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(!text.contains("simulation_steps"), "{text}");
+    assert!(!text.contains("gravity"), "{text}");
+    // Loaded with an implicit solver, the steps are that solver's, as for the original.
+    let registry = cloth_run::default_registry();
+    let saved = cloth_scene::load(&path.to_string_lossy(), &[]).unwrap();
+    let original = cloth_scene::load("drape", &[]).unwrap();
+    let implicit = registry.get("implicit").unwrap();
+    assert_eq!(
+        cloth_run::solvers::steps_for(&saved, implicit),
+        cloth_run::solvers::steps_for(&original, implicit)
+    );
+    // An edited steps per frame is saved.
+    select(&mut app, "steps/frame");
+    press(&mut app, KeyCode::Right);
+    let steps = app.sim.settings.params.steps_per_frame;
+    press(&mut app, KeyCode::Char('S'));
+    press(&mut app, KeyCode::Enter);
+    press(&mut app, KeyCode::Char('y'));
+    let saved = cloth_scene::load(&path.to_string_lossy(), &[]).unwrap();
+    assert_eq!(saved.params.steps_per_frame, steps);
+    assert!(saved.gives_steps());
+}
+
+#[test]
+fn the_compare_table_keeps_every_figure_whole_and_tells_the_variants_apart() {
+    let mut app = compare_with("pinned4", &["cloth.ks=1,5000", "cloth.density=10,150"]);
+    assert!(run_for(&mut app, 0.3));
+    let kinetic: Vec<String> = compared(&app)
+        .iter()
+        .map(|sim| super::view::sig(sim.history.back().unwrap().kinetic))
+        .collect();
+    for (w, h) in [(100, 30), (80, 24), (160, 48)] {
+        let shown = screen(&mut app, w, h);
+        for k in &kinetic {
+            assert!(
+                shown.contains(&format!(" {k} ")),
+                "{w} x {h}: the kinetic energy {k} is not whole:\n{shown}"
+            );
+        }
+        assert!(shown.contains("kinetic J"), "{w} x {h}:\n{shown}");
+        // Each variant's name is on screen whole: in its row or in the legend.
+        let c = app.compare.as_ref().unwrap();
+        let titles: Vec<String> = std::iter::once(c.title.clone())
+            .chain(c.members.iter().map(|m| m.title.clone()))
+            .collect();
+        for t in &titles {
+            assert!(
+                shown.contains(t.as_str()),
+                "{w} x {h}: {t:?} is cut:\n{shown}"
+            );
+        }
+    }
+}
+
+#[test]
+fn figures_keep_four_significant_digits_and_their_exponent() {
+    use super::view::sig;
+    assert_eq!(sig(2.28e-6), "2.280e-6");
+    assert_eq!(sig(-0.612_34), "-0.6123");
+    assert_eq!(sig(1.1264), "1.126");
+    assert_eq!(sig(12346.0), "1.235e4");
+    assert_eq!(sig(9.999_96), "10.00");
+    assert_eq!(sig(0.012_345), "0.01235");
+    assert_eq!(sig(0.0), "0");
+    assert_eq!(sig(f64::NAN), "-");
+}
+
+#[test]
+fn the_picker_labels_a_state_file_as_a_state_not_a_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, state) = paused_pinned4_with_a_state_file_at_frame_3(dir.path());
+    let name = state.file_name().unwrap().to_string_lossy().into_owned();
+    std::fs::write(
+        dir.path().join("mine.json"),
+        cloth_scene::bundled("sphere").unwrap().json,
+    )
+    .unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    press(&mut app, KeyCode::Char('o'));
+    let shown = screen(&mut app, 140, 44);
+    let line = |n: &str| {
+        shown
+            .lines()
+            .find(|l| l.contains(n))
+            .unwrap_or_default()
+            .to_owned()
+    };
+    assert!(line(&name).contains("a cloth's state"), "{shown}");
+    assert!(line("mine.json").contains("scene file"), "{shown}");
+}
+
+#[test]
+fn a_grid_resized_by_set_warns_that_the_pins_keep_their_indices() {
+    let args = |sets: &[&str]| Args {
+        scene: "pinned4".to_owned(),
+        paused: true,
+        sets: sets.iter().map(|s| (*s).to_owned()).collect(),
+        ..Args::default()
+    };
+    let build = |a: &Args| {
+        build_in(
+            a,
+            &cloth_run::default_registry(),
+            false,
+            &cloth_render::ColorEnv::default(),
+        )
+        .unwrap()
+    };
+    let app = build(&args(&["cloth.num_width_points=100"]));
+    let note = app
+        .note
+        .as_ref()
+        .map(|n| n.text.clone())
+        .unwrap_or_default();
+    assert!(note.contains("100 x") && note.contains("[49,0]"), "{note}");
+    // Pins given too, or no resize: nothing to say.
+    let app = build(&args(&[
+        "cloth.num_width_points=100",
+        "cloth.pinned=[[0,0],[99,0]]",
+    ]));
+    assert!(app.note.as_ref().is_none_or(|n| !n.text.contains("pins")));
+    let app = build(&args(&["cloth.ks=100"]));
+    assert!(app.note.as_ref().is_none_or(|n| !n.text.contains("pins")));
+}
+
+#[test]
+fn the_value_prompt_shows_its_whole_hint_at_100_columns() {
+    let mut app = app_with("pinned4", true);
+    press(&mut app, KeyCode::Enter);
+    let shown = screen(&mut app, 100, 30);
+    assert!(
+        shown.contains("type to replace, ←→ to edit; Enter accepts, Esc cancels"),
+        "{shown}"
+    );
+    type_text(&mut app, "x");
+    press(&mut app, KeyCode::Enter);
+    let shown = screen(&mut app, 100, 30);
+    assert!(shown.contains("C-w deletes a word"), "{shown}");
 }

@@ -28,7 +28,10 @@ pub fn update(app: &mut App, msg: Message) {
                 app.quit = true;
             }
         }
-        Message::Escape => escape(app),
+        Message::Escape => {
+            app.after_save = None;
+            escape(app);
+        }
         Message::Suspend => app.suspend = true,
         Message::ToggleMouse => {
             app.mouse = !app.mouse;
@@ -147,6 +150,11 @@ pub fn update(app: &mut App, msg: Message) {
             }
         }
         Message::Save => {
+            // S in the quit (or open) dialog saves, then quits (or opens), as it says.
+            app.after_save = match app.overlay {
+                Overlay::ConfirmDiscard(then) => Some(then),
+                _ => None,
+            };
             let stem = scene_stem(app);
             app.overlay = Overlay::Prompt(Prompt::prefilled(
                 Purpose::SavePath,
@@ -222,7 +230,9 @@ pub fn update(app: &mut App, msg: Message) {
         }),
         Message::Move(d) => match &mut app.overlay {
             Overlay::Help => {
-                app.help_scroll = (i64::from(app.help_scroll) + i64::from(d)).clamp(0, 200) as u16;
+                // The scroll stops where the last row shows, so the way back is as short.
+                let most = i64::from(super::view::help_scroll_max(app));
+                app.help_scroll = (i64::from(app.help_scroll) + i64::from(d)).clamp(0, most) as u16;
             }
             Overlay::Picker(p) => {
                 // NOTE: the list stops at its ends rather than wrapping, so a held key does
@@ -850,6 +860,21 @@ fn prompt_edit(app: &mut App, f: impl FnOnce(&mut Prompt)) {
     }
 }
 
+/// Whether `path` holds a cloth's state (what `simulate` writes) rather than a scene: its
+/// first key is the state's, where a scene's never is.
+fn is_state_file(path: &std::path::Path) -> bool {
+    use std::io::Read as _;
+    let mut head = [0u8; 64];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .unwrap_or(0);
+    let text = String::from_utf8_lossy(&head[..n]);
+    text.trim_start()
+        .trim_start_matches('{')
+        .trim_start()
+        .starts_with("\"num_width_points\"")
+}
+
 /// The `*.json` files directly in `dir`, sorted; none if it cannot be read.
 fn json_files(dir: &std::path::Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
@@ -979,12 +1004,31 @@ fn answer(app: &mut App, yes: bool) {
 
 fn save(app: &mut App, path: &std::path::Path) -> anyhow::Result<()> {
     let sim = &app.sim;
-    let file = sim.scene.to_file(
+    let mut file = sim.scene.to_file(
         &sim.settings.params,
         &sim.settings.colliders,
         sim.entry().name(),
         sim.options(),
     );
+    // A key the scene did not give stays out unless its value was edited, so the saved scene
+    // loads as the original did: above all, steps per frame that follow the solver's
+    // recommendation must not be pinned to the number the current solver happens to use.
+    let given = sim.scene.file.simulation.clone().unwrap_or_default();
+    let (now, loaded) = (&sim.settings.params, &sim.scene.params);
+    if let Some(s) = file.simulation.as_mut() {
+        if given.simulation_steps.is_none() && sim.steps_follow_solver() {
+            s.simulation_steps = None;
+        }
+        if given.frames_per_sec.is_none() && now.frames_per_sec == loaded.frames_per_sec {
+            s.frames_per_sec = None;
+        }
+        if given.gravity.is_none() && now.gravity == loaded.gravity {
+            s.gravity = None;
+        }
+        if given.self_collision.is_none() && now.self_collision == loaded.self_collision {
+            s.self_collision = None;
+        }
+    }
     let mut text = serde_json::to_string_pretty(&file)?;
     text.push('\n');
     let written = output::write_atomic(path, text.as_bytes())?;
@@ -997,6 +1041,11 @@ fn save(app: &mut App, path: &std::path::Path) -> anyhow::Result<()> {
     match written.note() {
         Some(note) => app.say(Level::Warn, format!("{saved}; {note}")),
         None => app.say(Level::Info, saved),
+    }
+    match app.after_save.take() {
+        Some(Then::Quit) => app.quit = true,
+        Some(Then::Open) => open_picker(app),
+        None => {}
     }
     Ok(())
 }
@@ -1082,7 +1131,15 @@ fn open_picker(app: &mut App) {
                 .map(|i| cloth_scene::BUNDLED.len() + i)
         })
         .unwrap_or(0);
-    app.overlay = Overlay::Picker(Picker { selected, files });
+    let states = files
+        .iter()
+        .map(|f| is_state_file(&app.cwd.join(f)))
+        .collect();
+    app.overlay = Overlay::Picker(Picker {
+        selected,
+        files,
+        states,
+    });
 }
 
 /// A typed path with a leading `~` meaning the home folder, as a shell would read it.
@@ -1150,16 +1207,26 @@ fn replace_scene(app: &mut App, scene: cloth_scene::Scene) {
 
 /// Refuses `scene` when its cloth would need more memory than the app may take (see
 /// [`cloth_run::memory::check`]), with the solver it asks for or else the default one.
-fn check_memory(app: &App, scene: &cloth_scene::Scene) -> anyhow::Result<()> {
+/// What the UI would need to run `scene` (with the solver it would get) and that solver;
+/// `None` with no solver registered. The one estimate behind the memory check and the big
+/// cloth's question.
+pub fn scene_need(
+    app: &App,
+    scene: &cloth_scene::Scene,
+) -> Option<(cloth_solver::SolverEntry, cloth_run::memory::Need)> {
     let registry = app.sim.registry();
     let (entry, options) = match cloth_run::solvers::choose(registry, scene, None) {
         Ok(choice) => (choice.entry, choice.options),
-        Err(_) => match registry.default_entry() {
-            Some(entry) => (*entry, serde_json::Value::Null),
-            None => return Ok(()),
-        },
+        Err(_) => (*registry.default_entry()?, serde_json::Value::Null),
     };
     let need = cloth_run::memory::ui_need(&entry, &options, &scene.mesh);
+    Some((entry, need))
+}
+
+fn check_memory(app: &App, scene: &cloth_scene::Scene) -> anyhow::Result<()> {
+    let Some((entry, need)) = scene_need(app, scene) else {
+        return Ok(());
+    };
     let who = cloth_run::memory::solver(&entry);
     let limit = (app.max_memory, cloth_run::memory::SMALLER_SCENE);
     cloth_run::memory::check(&scene.origin, &who, &scene.mesh, need, limit)

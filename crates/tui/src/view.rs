@@ -57,6 +57,28 @@ pub fn view(app: &App, f: &mut Frame) {
     }
 }
 
+#[cfg(test)]
+pub use compare::sig;
+
+/// Rows compare mode's table needs at `width` columns.
+pub fn compare_table_height(app: &App, width: u16) -> u16 {
+    compare::table_height(app, width)
+}
+
+/// How far the help overlay scrolls on the app's screen before its last row shows.
+pub fn help_scroll_max(app: &App) -> u16 {
+    let area = Rect::new(0, 0, app.screen.0, app.screen.1);
+    let Some(r) = layout::regions(app, area) else {
+        return 0;
+    };
+    let body = Rect {
+        y: r.title.y + 1,
+        height: r.note.y.saturating_sub(r.title.y + 1),
+        ..area
+    };
+    overlay::help_scroll_max(body)
+}
+
 fn pane(app: &App, f: &mut Frame, slot: usize, rect: Rect, theme: &Theme) {
     let view = app.views[slot];
     let focused = slot == app.focus && app.visible_slots().len() > 1;

@@ -68,58 +68,159 @@ pub fn panes(app: &App, f: &mut Frame, rects: &[Rect], theme: &Theme) {
     }
 }
 
+/// A figure in 4 significant digits: fixed between 0.01 and 10 000, else with its exponent
+/// (`2.280e-6`), so narrowing the table never cuts the exponent off; `-` when not measured.
+pub fn sig(x: f64) -> String {
+    if !x.is_finite() {
+        return "-".to_owned();
+    }
+    if x == 0.0 {
+        return "0".to_owned();
+    }
+    let a = x.abs();
+    if (0.01..10_000.0).contains(&a) {
+        let magnitude = a.log10().floor() as i32;
+        let decimals = (3 - magnitude).max(0) as usize;
+        let s = format!("{x:.decimals$}");
+        // Rounding can reach the next power of ten (9.996 -> 10.00): one decimal fewer.
+        let rounded: f64 = s.parse().unwrap_or(x);
+        if rounded.abs() >= 10f64.powi(magnitude + 1) && decimals > 0 {
+            return format!("{x:.prec$}", prec = decimals - 1);
+        }
+        return s;
+    }
+    format!("{x:.3e}")
+}
+
+/// Column headers of the table (units in the header, so the cells hold only digits).
+const HEADERS: [&str; 5] = ["centre m", "lowest m", "stretch", "kinetic J", "stopped"];
+
+/// The table's text at `width` columns inside its border: the rows' cells and the legend
+/// lines that name the variants when their names do not fit (then the rows say A, B, ...).
+struct TableText {
+    rows: Vec<[String; 6]>,
+    widths: [u16; 6],
+    legend: Vec<String>,
+}
+
+fn table_text(app: &App, width: u16) -> TableText {
+    let mut rows: Vec<[String; 6]> = variants(app)
+        .into_iter()
+        .map(|(title, sim, _)| {
+            let mesh = &sim.scene.mesh;
+            let state = &sim.state;
+            let centre = state
+                .positions
+                .get(mesh.index(mesh.nw() / 2, mesh.nh() / 2))
+                .map_or(f64::NAN, |p| p.y);
+            let lowest = state
+                .positions
+                .iter()
+                .map(|p| p.y)
+                .fold(f64::INFINITY, f64::min);
+            // NOTE: the UI's copy of a worker's state has its positions only, so velocities
+            // come from the last frame's sample (taken where the state is whole), not the copy.
+            let (kinetic, stretch) = sim
+                .history
+                .back()
+                .map_or((f64::NAN, f64::NAN), |s| (s.kinetic, s.stretch));
+            [
+                title.to_owned(),
+                sig(centre),
+                sig(lowest),
+                sig(stretch),
+                sig(kinetic),
+                match &sim.fault {
+                    Some(fault) => format!("yes: {}", fault.what),
+                    None => "no".to_owned(),
+                },
+            ]
+        })
+        .collect();
+    let mut widths = [0u16; 6];
+    for (k, h) in HEADERS.iter().enumerate() {
+        let longest = rows
+            .iter()
+            .map(|r| r[k + 1].chars().count())
+            .max()
+            .unwrap_or(0);
+        widths[k + 1] = h.len().max(longest) as u16;
+    }
+    // The numbers come first; "stopped" keeps its header's width, the reason is cut.
+    widths[5] = HEADERS[4].len() as u16;
+    let spacing = 6;
+    let fixed: u16 = widths[1..].iter().sum::<u16>() + spacing;
+    let room = width.saturating_sub(fixed);
+    let longest_title = rows.iter().map(|r| r[0].chars().count()).max().unwrap_or(0) as u16;
+    let mut legend = Vec::new();
+    if longest_title.max(7) <= room {
+        widths[0] = longest_title.max(7);
+        widths[5] += room - widths[0];
+    } else {
+        // Letters in the rows, the names in a legend below.
+        let mut line = String::new();
+        for (i, r) in rows.iter_mut().enumerate() {
+            let letter = char::from(b'A' + (i % 26) as u8).to_string();
+            let entry = format!("{letter} {}", r[0]);
+            if !line.is_empty()
+                && line.chars().count() + 2 + entry.chars().count() > usize::from(width)
+            {
+                legend.push(std::mem::take(&mut line));
+            }
+            if !line.is_empty() {
+                line.push_str("  ");
+            }
+            line.push_str(&entry);
+            r[0] = letter;
+        }
+        if !line.is_empty() {
+            legend.push(line);
+        }
+        widths[0] = room.clamp(1, 7);
+        widths[5] += room - widths[0];
+    }
+    TableText {
+        rows,
+        widths,
+        legend,
+    }
+}
+
+/// Rows the table needs at `width` columns (border, header, a row per variant, the legend).
+pub fn table_height(app: &App, width: u16) -> u16 {
+    let t = table_text(app, width.saturating_sub(2));
+    (t.rows.len() + t.legend.len() + 3) as u16
+}
+
 /// Draws the table: per variant the centre's and the lowest point's heights, the largest
-/// stretch, the kinetic energy and whether it stopped.
+/// stretch, the kinetic energy and whether it stopped; figures in 4 significant digits with
+/// their exponents, variant names in a legend when they do not fit.
 pub fn table(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     if area.height < 3 {
         return;
     }
+    let inside = inner(area);
+    let t = table_text(app, inside.width);
     let header = Row::new(
-        [
-            "variant",
-            "centre height",
-            "lowest height",
-            "max stretch",
-            "kinetic energy",
-            "diverged",
-        ]
-        .map(|h| Cell::from(h).style(theme.dim)),
+        std::iter::once("variant")
+            .chain(HEADERS)
+            .map(|h| Cell::from(h).style(theme.dim)),
     );
-    let rows = variants(app).into_iter().map(|(title, sim, _)| {
-        let mesh = &sim.scene.mesh;
-        let state = &sim.state;
-        let centre = state
-            .positions
-            .get(mesh.index(mesh.nw() / 2, mesh.nh() / 2))
-            .map_or(f64::NAN, |p| p.y);
-        let lowest = state
-            .positions
-            .iter()
-            .map(|p| p.y)
-            .fold(f64::INFINITY, f64::min);
-        // NOTE: the UI's copy of a worker's state has its positions only, so velocities come
-        // from the last frame's sample (taken where the state is whole), not from the copy.
-        let (kinetic, stretch) = sim
-            .history
-            .back()
-            .map_or((f64::NAN, f64::NAN), |s| (s.kinetic, s.stretch));
-        let style = if sim.fault.is_some() {
-            theme.dim
-        } else {
-            theme.text
-        };
+    let stopped: Vec<bool> = variants(app)
+        .iter()
+        .map(|(_, sim, _)| sim.fault.is_some())
+        .collect();
+    let rows = t.rows.iter().zip(&stopped).map(|(r, &stop)| {
+        let right = |s: &str, w: u16| format!("{s:>w$}", w = usize::from(w));
         Row::new([
-            Cell::from(title.to_owned()),
-            Cell::from(format!("{centre:>10.4} m")),
-            Cell::from(format!("{lowest:>10.4} m")),
-            Cell::from(format!("{stretch:>8.4}")),
-            Cell::from(format!("{kinetic:>11.3e} J")),
-            Cell::from(match &sim.fault {
-                Some(fault) => format!("yes: {}", fault.what),
-                None => "no".to_owned(),
-            }),
+            Cell::from(r[0].clone()),
+            Cell::from(right(&r[1], t.widths[1])),
+            Cell::from(right(&r[2], t.widths[2])),
+            Cell::from(right(&r[3], t.widths[3])),
+            Cell::from(right(&r[4], t.widths[4])),
+            Cell::from(r[5].clone()),
         ])
-        .style(style)
+        .style(if stop { theme.dim } else { theme.text })
     });
     let axes = app
         .compare
@@ -132,18 +233,22 @@ pub fn table(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
                 .join("  x  ")
         })
         .unwrap_or_default();
-    let widths = [
-        Constraint::Length(22),
-        Constraint::Length(14),
-        Constraint::Length(14),
-        Constraint::Length(11),
-        Constraint::Length(15),
-        Constraint::Min(8),
-    ];
-    let table = Table::new(rows, widths).header(header).block(
-        Block::bordered()
-            .border_style(theme.border)
-            .title(Line::styled(format!(" compare: {axes} "), theme.text)),
-    );
+    let widths = t.widths.map(Constraint::Length);
+    let table = Table::new(rows, widths)
+        .header(header)
+        .column_spacing(1)
+        .block(
+            Block::bordered()
+                .border_style(theme.border)
+                .title(Line::styled(format!(" compare: {axes} "), theme.text)),
+        );
     f.render_widget(table, area);
+    let used = (t.rows.len() + 1) as u16;
+    for (i, line) in t.legend.iter().enumerate() {
+        let y = inside.y + used + i as u16;
+        if y < inside.bottom() {
+            f.buffer_mut()
+                .set_stringn(inside.x, y, line, usize::from(inside.width), theme.dim);
+        }
+    }
 }

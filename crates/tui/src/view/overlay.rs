@@ -39,11 +39,21 @@ fn boxed(
     inside
 }
 
-/// The help, generated from [`KEYMAP`]: two columns when wide enough, else one that scrolls;
-/// the box fits its text, so it sits centred.
-pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
-    /// Columns between the two columns of keys.
-    const GAP: usize = 4;
+/// The help's text laid out for `area`: its columns, whether there are two, the box's width
+/// and the rows.
+struct HelpText {
+    left: Vec<Line<'static>>,
+    right: Vec<Line<'static>>,
+    two: bool,
+    w: u16,
+    rows: u16,
+    left_w: u16,
+}
+
+/// Columns between the two columns of keys.
+const GAP: usize = 4;
+
+fn help_text(area: Rect, theme: &Theme) -> HelpText {
     let key_w = KEYMAP
         .iter()
         .map(|b| keys_label(b).chars().count())
@@ -98,6 +108,34 @@ pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     } else {
         width(&left) as u16 + 2
     };
+    HelpText {
+        left_w: width(&left) as u16,
+        left,
+        right,
+        two,
+        w,
+        rows,
+    }
+}
+
+/// How far the help scrolls in `area` before its last row is at the bottom.
+pub fn help_scroll_max(area: Rect) -> u16 {
+    let t = help_text(area, &Theme::new(false));
+    let inside = (t.rows + 2).min(area.height).saturating_sub(2);
+    t.rows.saturating_sub(inside)
+}
+
+/// The help, generated from [`KEYMAP`]: two columns when wide enough, else one that scrolls;
+/// the box fits its text, so it sits centred.
+pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
+    let HelpText {
+        left,
+        right,
+        two,
+        w,
+        rows,
+        left_w,
+    } = help_text(area, theme);
     let inside = boxed(
         f,
         area,
@@ -108,7 +146,7 @@ pub fn help(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
     );
     let scroll = app.help_scroll.min(rows.saturating_sub(inside.height));
     if two {
-        let lw = width(&left) as u16;
+        let lw = left_w;
         f.render_widget(
             Paragraph::new(left).scroll((scroll, 0)),
             Rect {
@@ -158,8 +196,13 @@ pub fn picker(f: &mut Frame, area: Rect, p: &Picker, theme: &Theme) {
         .collect();
     for (k, name) in p.files.iter().enumerate() {
         let i = scenes.len() + k;
+        let what = if p.states.get(k).copied().unwrap_or(false) {
+            "a cloth's state, not a scene: start a scene from it with --from"
+        } else {
+            "scene file in this folder"
+        };
         lines.push(Line::styled(
-            format!(" {name:<name_w$}  scene file in this folder"),
+            format!(" {name:<name_w$}  {what}"),
             style(i, theme.text),
         ));
     }
@@ -209,14 +252,6 @@ pub fn prompt(app: &App, f: &mut Frame, area: Rect, p: &Prompt, theme: &Theme) {
         ),
         Purpose::OpenPath => ("open a scene file", "path of a scene JSON file:".to_owned()),
     };
-    let w = (question
-        .chars()
-        .count()
-        .max(p.text.chars().count() + 2)
-        .max(50)
-        + 4) as u16;
-    let h = if p.error.is_some() { 7 } else { 5 };
-    let inside = boxed(f, area, w, h + 2, title, theme.focus);
     let mut text: Vec<Span> = Vec::new();
     let chars: Vec<char> = p.text.chars().collect();
     let before: String = chars[..p.cursor.min(chars.len())].iter().collect();
@@ -242,14 +277,18 @@ pub fn prompt(app: &App, f: &mut Frame, area: Rect, p: &Prompt, theme: &Theme) {
         lines.push(Line::styled(e.clone(), theme.error));
         lines.push(Line::raw(""));
     }
-    lines.push(Line::styled(
-        if p.selected {
-            "type to replace, ←→ to edit; Enter accepts, Esc cancels"
-        } else {
-            "Enter accepts, Esc cancels; C-u clears, C-w deletes a word"
-        },
-        theme.dim,
-    ));
+    let hint = if p.selected {
+        "type to replace, ←→ to edit; Enter accepts, Esc cancels"
+    } else {
+        "Enter accepts, Esc cancels; C-u clears, C-w deletes a word"
+    };
+    lines.push(Line::styled(hint, theme.dim));
+    // The box is as wide as its longest line (the screen allowing) and as tall as its lines
+    // wrapped, so no line is cut.
+    let w = (lines.iter().map(Line::width).max().unwrap_or(0).max(50) + 4)
+        .min(usize::from(area.width)) as u16;
+    let h = rows_of(&lines, w);
+    let inside = boxed(f, area, w, h + 2, title, theme.focus);
     f.render_widget(Paragraph::new(lines).wrap(Wrap { trim: false }), inside);
 }
 
@@ -342,14 +381,20 @@ pub fn big(app: &App, f: &mut Frame, area: Rect, points: usize, theme: &Theme) {
         .big
         .as_ref()
         .map_or_else(String::new, |s| s.origin.clone());
-    // Positions, last positions and a copy for the screen: three vectors of 24 bytes a point,
-    // besides the springs (about six per point, 24 bytes each).
-    let mb = points as f64 * (3.0 * 24.0 + 6.0 * 24.0) / 1e6;
+    // The estimate the memory check uses: the solver's, the cloth's states and the drawing.
+    let need = app
+        .big
+        .as_ref()
+        .and_then(|s| crate::update::scene_need(app, s))
+        .map_or_else(
+            || "an unknown amount of memory".to_owned(),
+            |(_, n)| format!("about {}", cloth_run::memory::human_bytes(n.total())),
+        );
     let lines = vec![
         Line::styled(
             format!(
                 "{name} has {points} points (more than {}). It will likely run slower than \
-                 real time and needs about {mb:.0} MB; the keys still answer at once.",
+                 real time and needs {need}; the keys still answer at once.",
                 crate::update::BIG_CLOTH
             ),
             theme.text,

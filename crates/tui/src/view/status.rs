@@ -83,7 +83,24 @@ pub fn title(app: &App, f: &mut Frame, area: Rect, theme: &Theme) {
             Span::styled(format!(" {:.0} steps/s ", r.steps_per_sec), theme.dim),
         ));
     }
-    if s.draws_per_sec > 0.0 {
+    if s.link.limited {
+        let why = if s.link.by_cap {
+            "held to --max-rate"
+        } else {
+            "limited by the terminal"
+        };
+        fields.push((
+            9,
+            Span::styled(
+                format!(
+                    " drawing {why}: {:.0} fps, {:.1} KB/s ",
+                    s.draws_per_sec,
+                    s.link.bytes_per_sec / 1024.0
+                ),
+                theme.warn,
+            ),
+        ));
+    } else if s.draws_per_sec > 0.0 {
         fields.push((
             6,
             Span::styled(format!(" {:.0} fps ", s.draws_per_sec), theme.dim),
