@@ -50,6 +50,11 @@ pub struct Args {
     /// the scene's. The frames and time written continue from the state's.
     #[arg(long, value_name = "STATE.json", value_hint = clap::ValueHint::FilePath)]
     from: Option<PathBuf>,
+    /// Touch the cloth as a script says: JSON lines of a frame and an action (grab a point
+    /// and hold it at a position, drag it, release it, poke it), each applied once that many
+    /// frames have been stepped; docs/files-and-output.md gives the format.
+    #[arg(long, value_name = "FILE", value_hint = clap::ValueHint::FilePath, conflicts_with = "vary")]
+    actions: Option<PathBuf>,
     /// Progress on stderr: auto (a bar when stderr is a terminal), always (also a line every
     /// 10 s when it is not: logs, CI), never. `--progress` alone means always.
     #[arg(long, value_name = "WHEN", default_value = "auto", value_parser = crate::args::when_parser(),
@@ -161,6 +166,9 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         }
         None => (0, 0.0),
     };
+    let mut actions = (args.actions.as_deref())
+        .map(|path| cloth_run::actions::Actions::read(path, run.scene.mesh.len()))
+        .transpose()?;
     let scene = std::sync::Arc::clone(&run.scene);
 
     // The bar would share the terminal with JSON on standard output only when both are the
@@ -199,6 +207,9 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let mut done = 0;
     for frame in 1..=args.frames {
         let started = std::time::Instant::now();
+        if let Some(a) = &mut actions {
+            a.apply_due(&mut run)?;
+        }
         let stepped = run.step_frame_with(&mut || progress.step()).map_err(|f| *f);
         let time = frame as f64 / params.frames_per_sec;
         match stepped {

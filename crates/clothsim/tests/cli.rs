@@ -1069,3 +1069,49 @@ fn options_are_never_dropped_silently() {
         stderr(&o)
     );
 }
+
+#[test]
+fn an_actions_script_grabs_holds_and_releases_a_point_the_same_way_every_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("hand.jsonl");
+    // pinned4's centre point (row 25, column 25) starts at (0.5, 1, 0.5): held 10 cm above.
+    std::fs::write(
+        &script,
+        "# lift the centre and let it go\n\
+         {\"frame\": 0, \"action\": \"grab\", \"point\": 1275, \"to\": [0.5, 1.1, 0.5]}\n\
+         {\"frame\": 5, \"action\": \"release\"}\n",
+    )
+    .unwrap();
+    let script = script.to_str().unwrap();
+    let centre = |frames: &str, actions: bool| -> Vec<f64> {
+        let mut args = vec!["simulate", "pinned4", "--frames", frames];
+        if actions {
+            args.extend(["--actions", script]);
+        }
+        let o = clothsim(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let p = &v["positions"][1275];
+        (0..3).map(|k| p[k].as_f64().unwrap()).collect()
+    };
+    assert_eq!(centre("3", true), [0.5, 1.1, 0.5], "held at the hand");
+    let released = centre("30", true);
+    assert!(released[1] < 1.1, "released, it falls: {released:?}");
+    assert_ne!(released, centre("30", false), "the touch changed the run");
+    assert_eq!(released, centre("30", true), "and replays to the bit");
+
+    let bad = dir.path().join("bad.jsonl");
+    std::fs::write(
+        &bad,
+        "{\"frame\": 1, \"action\": \"poke\", \"point\": 2500, \"velocity\": [0, 0, 1]}\n",
+    )
+    .unwrap();
+    let o = clothsim(&["simulate", "pinned4", "--actions", bad.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o)
+            .contains("bad.jsonl:1: point 2500 is not on the cloth: its points are 0 to 2499"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -13,6 +13,7 @@
 //!
 //! Nothing here touches a terminal or parses a command line.
 
+pub mod actions;
 pub mod export;
 pub mod guard;
 pub mod headless;
