@@ -37,7 +37,7 @@ pub fn frame_error(
 ) -> anyhow::Error {
     let at = format!("{}: frame {frame} of {frames}", scene.origin);
     match e {
-        SolveError::NonFinite { .. } => {
+        SolveError::NonFinite { .. } | SolveError::Method { .. } => {
             let advice = cloth_scene::divergence_advice(scene, params, explicit);
             anyhow::anyhow!("{at}: {e}; {advice}")
         }
@@ -55,4 +55,46 @@ pub fn note_shadowing(name: &str) {
             "clothsim: note: read the bundled scene {name}; for the file of that name, write {file}"
         );
     }
+}
+
+/// How many times its rest length a spring may end a run with the stretch limit on before the
+/// run is said to have outrun the limit: the limit holds springs near
+/// [`cloth_mesh::MAX_STRETCH`] (1.1), and a settled cloth under it ends within a few percent of
+/// that, so 1.5 is a limit that no longer holds.
+pub const STRETCH_WARNING: f64 = 1.5;
+
+/// A warning for a run of `scene` with `params` that ends at `state` with the stretch limit on
+/// and a spring past [`STRETCH_WARNING`] times its rest length: the result is not the cloth
+/// the limit describes, though the user may have asked for it; `None` otherwise.
+pub fn stretch_warning(
+    scene: &cloth_scene::Scene,
+    params: &StepParams,
+    state: &cloth_mesh::ClothState,
+) -> Option<String> {
+    if !params.stretch_limit {
+        return None;
+    }
+    let stretch = cloth_solver::max_stretch_ratio(&scene.mesh, state);
+    if stretch.is_nan() || stretch <= STRETCH_WARNING {
+        return None;
+    }
+    // Gravity a hundred times the Earth's is named as the force the limit cannot hold.
+    let g = params.gravity.norm();
+    let cause = if g > 100.0 * 9.8 {
+        format!(
+            "simulation.gravity of {} m/s^2 pulls harder than its corrections can undo in a step \
+             (the Earth's is 9.8)",
+            crate::guard::short(g)
+        )
+    } else {
+        "the forces on the cloth pull harder than its corrections can undo in a step".to_owned()
+    };
+    Some(format!(
+        "{}: the stretch limit is on, yet the cloth ends with a spring at {} times its rest \
+         length (the limit holds springs near {}): {cause}; raise simulation.simulation_steps \
+         or lower the forces for a cloth the limit holds",
+        scene.origin,
+        crate::guard::short(stretch),
+        cloth_mesh::MAX_STRETCH
+    ))
 }

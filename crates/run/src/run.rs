@@ -134,7 +134,7 @@ pub struct Run {
     pub peak_kinetic: f64,
     /// Set when the run diverged or exploded; cleared by a reset.
     pub fault: Option<Fault>,
-    guard: Guard,
+    pub(crate) guard: Guard,
     recording: bool,
 }
 
@@ -519,9 +519,9 @@ impl Run {
 
     fn end_frame(&mut self) -> Result<(), Box<Fault>> {
         let checked = self.guard.check_state(
+            &self.scene.mesh,
             &self.state,
             &self.settings.params,
-            self.point_mass(),
             self.time,
         );
         if let Err(d) = checked {
@@ -569,7 +569,11 @@ impl Run {
         self.peak_kinetic = self.peak_kinetic.max(s.kinetic);
     }
 
+    /// Every start (a new run, a reset, a state from a file) samples here: the guard's energy
+    /// reference is taken from the same state.
     fn sample(&mut self) {
+        self.guard
+            .start(&self.scene.mesh, &self.state, &self.settings.params);
         let s = self.measure();
         self.push(s);
     }
@@ -579,7 +583,7 @@ impl Run {
             time: self.time,
             what: d.describe(),
             advice: d.advice(&self.choice.entry, &self.settings.params, self.point_mass()),
-            resumable: matches!(d, Divergence::Runaway { .. }),
+            resumable: d.resumable(),
             frame: self.frames,
             cause: Cause::Diverged(d.clone()),
         };

@@ -26,6 +26,7 @@ pub use advice::divergence_advice;
 pub use bundled::{BUNDLED, BundledScene, bundled};
 pub use error::SceneError;
 pub use file::{ClothBlock, PlaneBlock, SceneFile, SimulationBlock, SphereBlock};
+pub use number::show;
 pub use overrides::apply_set;
-pub use read::{MAX_SCENE_BYTES, check_scene_path, read_scene_file};
+pub use read::{MAX_SCENE_BYTES, check_scene_path, read_scene_file, special_kind, utf8_text};
 pub use scene::{Scene, load, parse, shadowing_file};
