@@ -264,7 +264,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             scene.origin,
             args.frames,
             d.describe(),
-            d.advice(&choice.entry, &params, point_mass)
+            headless::divergence_advice(&scene, &params, &choice.entry, &d)
         )
     });
 

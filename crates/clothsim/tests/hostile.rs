@@ -421,12 +421,12 @@ fn every_output_target_is_proved_writable_before_the_run() {
 #[test]
 fn out_to_a_fifo_is_refused_at_once_for_every_format() {
     let dir = tempfile::tempdir().unwrap();
-    for name in [
-        "state.json",
-        "state.obj",
-        "anim.pc2",
-        "anim.mdd",
-        "stats.csv",
+    for (name, flag) in [
+        ("state.json", "--out"),
+        ("state.obj", "--out"),
+        ("anim.pc2", "--out"),
+        ("anim.mdd", "--out"),
+        ("stats.csv", "--stats"),
     ] {
         let fifo = dir.path().join(name);
         assert!(
@@ -436,11 +436,7 @@ fn out_to_a_fifo_is_refused_at_once_for_every_format() {
                 .unwrap()
                 .success()
         );
-        let flag = if name.ends_with(".csv") {
-            "--stats"
-        } else {
-            "--out"
-        };
+
         // Without a reader, a FIFO opened for writing blocks forever.
         let o = within(
             Duration::from_secs(30),
@@ -462,6 +458,7 @@ fn out_to_a_fifo_is_refused_at_once_for_every_format() {
 #[cfg(target_os = "linux")]
 #[test]
 fn a_folder_that_takes_no_new_file_is_refused_before_the_run_for_a_plain_user() {
+    use std::os::unix::fs::PermissionsExt;
     // The superuser may create files anywhere: the case needs a dropped uid.
     let root = Command::new("id").arg("-u").output().unwrap();
     let has_setpriv = Command::new("setpriv").arg("--help").output().is_ok();
@@ -472,7 +469,6 @@ fn a_folder_that_takes_no_new_file_is_refused_before_the_run_for_a_plain_user() 
     let dir = tempfile::tempdir().unwrap();
     // The temporary folder itself is private; a world-readable folder inside it is not
     // writable by the plain user.
-    use std::os::unix::fs::PermissionsExt;
     std::fs::set_permissions(dir.path(), std::fs::Permissions::from_mode(0o755)).unwrap();
     let out = dir.path().join("state.json");
     let o = Command::new("setpriv")

@@ -4,6 +4,8 @@
 use cloth_mesh::StepParams;
 use cloth_solver::SolveError;
 
+use crate::guard::Divergence;
+
 /// A run's fault in frame `frame` of `frames`, naming the scene: a step's error as
 /// [`frame_error`] words it, anything else as the fault says it.
 pub fn fault_error(
@@ -41,7 +43,7 @@ pub fn frame_error(
             let advice = cloth_scene::divergence_advice(scene, params, explicit);
             anyhow::anyhow!("{at}: {e}; {advice}")
         }
-        _ => anyhow::anyhow!("{at}: {e}"),
+        SolveError::Params(_) => anyhow::anyhow!("{at}: {e}"),
     }
 }
 
@@ -97,4 +99,25 @@ pub fn stretch_warning(
         crate::guard::short(stretch),
         cloth_mesh::MAX_STRETCH
     ))
+}
+
+/// What to change after the guard stopped a run of `scene` with `params` under `entry`: the
+/// guard's advice for the cause ([`Divergence::advice`]), led by the scene's value furthest
+/// from the course's cloth when a runaway or an energy rise came within the step's stability
+/// limit (a density of 1e-300 is the cause, not the contacts).
+pub fn divergence_advice(
+    scene: &cloth_scene::Scene,
+    params: &StepParams,
+    entry: &cloth_solver::SolverEntry,
+    d: &Divergence,
+) -> String {
+    let point_mass = scene.mesh.point_mass(params.density);
+    let general = d.advice(entry, params, point_mass);
+    let within_limit = !entry.is_explicit() || params.ks <= params.explicit_ks_limit(point_mass);
+    match cloth_scene::unusual_value(scene, params) {
+        Some((what, remedy)) if within_limit && !matches!(d, Divergence::NonFinite) => {
+            format!("{what}: {remedy}; otherwise {general}")
+        }
+        _ => general,
+    }
 }

@@ -22,7 +22,7 @@ mod overrides;
 mod read;
 mod scene;
 
-pub use advice::divergence_advice;
+pub use advice::{divergence_advice, unusual_value};
 pub use bundled::{BUNDLED, BundledScene, bundled};
 pub use error::SceneError;
 pub use file::{ClothBlock, PlaneBlock, SceneFile, SimulationBlock, SphereBlock};
