@@ -121,3 +121,49 @@ pub fn divergence_advice(
         _ => general,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// pinned4's start with its first structural spring (points 0 and 1, along the width)
+    /// stretched to `ratio` times its rest length, and the scene.
+    fn stretched(ratio: f64, sets: &[&str]) -> (cloth_scene::Scene, cloth_mesh::ClothState) {
+        let sets: Vec<String> = sets.iter().map(|s| (*s).to_owned()).collect();
+        let scene = cloth_scene::load("pinned4", &sets).unwrap();
+        let mut state = cloth_mesh::ClothState::new(&scene.mesh);
+        let rest = (state.positions[1] - state.positions[0]).norm();
+        let along = (state.positions[1] - state.positions[0]) / rest;
+        state.positions[1] = state.positions[0] + along * (rest * ratio);
+        (scene, state)
+    }
+
+    #[test]
+    fn a_cloth_past_one_and_a_half_rest_lengths_under_the_stretch_limit_is_warned_about() {
+        for (ratio, warned) in [
+            (STRETCH_WARNING * 0.9998, false),
+            (STRETCH_WARNING * 1.0002, true),
+        ] {
+            let (scene, state) = stretched(ratio, &[]);
+            assert!(
+                (cloth_solver::max_stretch_ratio(&scene.mesh, &state) / ratio - 1.0).abs() < 1e-12
+            );
+            let w = stretch_warning(&scene, &scene.params, &state);
+            assert_eq!(w.is_some(), warned, "{ratio}: {w:?}");
+            if let Some(w) = w {
+                assert!(w.contains("at 1.5 times its rest length"), "{w}");
+                assert!(
+                    !w.contains("gravity of"),
+                    "ordinary gravity is not blamed: {w}"
+                );
+            }
+        }
+        // With the limit off, a stretched cloth is the course's experiment: nothing to say.
+        let (scene, state) = stretched(3.0, &["simulation.stretch_limit=false"]);
+        assert_eq!(stretch_warning(&scene, &scene.params, &state), None);
+        // Gravity a hundred times the Earth's and more is named.
+        let (scene, state) = stretched(3.0, &["simulation.gravity=[0,-1e4,0]"]);
+        let w = stretch_warning(&scene, &scene.params, &state).unwrap();
+        assert!(w.contains("simulation.gravity of 1.0e4 m/s^2"), "{w}");
+    }
+}
