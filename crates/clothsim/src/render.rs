@@ -536,7 +536,6 @@ fn diverged_error(
     let Some((frame, d)) = diverged else {
         return Ok(());
     };
-    let point_mass = scene.mesh.point_mass(scene.params.density);
     anyhow::bail!(
         "{}: the run diverged at frame {frame} of {} (t = {:.3} s): {}; {}; the frames before \
          it were printed",
@@ -544,7 +543,7 @@ fn diverged_error(
         args.frames,
         frame as f64 / scene.params.frames_per_sec,
         d.describe(),
-        d.advice(entry, &scene.params, point_mass)
+        cloth_run::headless::divergence_advice(scene, &scene.params, entry, &d)
     )
 }
 

@@ -1,6 +1,8 @@
 //! `clothsim simulate`: run a scene headless and write its final state.
 
 use std::io::Write as _;
+
+use anyhow::Context as _;
 use std::path::PathBuf;
 
 use cloth_solver::Registry;
@@ -136,6 +138,10 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         if !matches!(format, Format::Animation(AnimationKind::ObjSequence { .. })) {
             output::check_target(path)?;
         }
+        // A diverged run's state goes beside it, under a longer name.
+        if matches!(format, Format::Json | Format::Obj) {
+            check_diverged_name(path)?;
+        }
     }
     let mut scene = cloth_scene::load(&args.scene, &args.sets)?;
     headless::note_shadowing(&args.scene);
@@ -269,7 +275,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             scene.origin,
             args.frames,
             d.describe(),
-            d.advice(&choice.entry, &params, point_mass)
+            headless::divergence_advice(&scene, &params, &choice.entry, &d)
         )
     });
 
@@ -315,6 +321,10 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
             "{what}; nothing was written (with --out FILE the state it reached is kept as \
              FILE.diverged)"
         );
+    }
+    if let Some(warning) = headless::stretch_warning(&scene, &params, state) {
+        // Nowhere else to say it; a lost warning does not change the result.
+        let _ = writeln!(std::io::stderr(), "clothsim: warning: {warning}");
     }
     if let Some(a) = animation {
         return a.finish();
@@ -386,6 +396,7 @@ fn run_study(args: &Args, registry: &Registry, format: &Format) -> anyhow::Resul
     };
     for path in &outs {
         output::check_target(path)?;
+        check_diverged_name(path)?;
     }
     headless::note_shadowing(&args.scene);
     let mut starts = Vec::with_capacity(variants.len());
@@ -459,6 +470,13 @@ fn run_study(args: &Args, registry: &Registry, format: &Format) -> anyhow::Resul
         let program = cloth_run::headless::program_name();
         let _ = writeln!(std::io::stderr(), "{program}: note: {note}");
     }
+    for run in runs.iter().filter(|r| !r.stopped()) {
+        let scene = &run.variant.scene;
+        if let Some(warning) = headless::stretch_warning(scene, &scene.params, run.state()) {
+            let title = &run.variant.title;
+            let _ = writeln!(std::io::stderr(), "clothsim: warning: {title}: {warning}");
+        }
+    }
 
     let summaries: Vec<study::Summary> = runs.iter().map(study::Run::summary).collect();
     let text = if args.json {
@@ -506,6 +524,19 @@ fn variant_name(path: &std::path::Path, label: &str) -> PathBuf {
         name.push(ext);
     }
     path.with_file_name(name)
+}
+
+/// Checks before the run that a diverged run's state could be kept beside `path`.
+fn check_diverged_name(path: &std::path::Path) -> anyhow::Result<()> {
+    let kept = diverged_name(path);
+    output::check_target(&kept).with_context(|| {
+        format!(
+            "--out {}: a run that diverges keeps the state it reached as {}, and that name must \
+             work too",
+            path.display(),
+            kept.display()
+        )
+    })
 }
 
 /// `out.json` -> `out.diverged.json`: where a diverged run's state is kept.

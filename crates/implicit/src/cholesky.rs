@@ -167,7 +167,7 @@ impl<T: Precision> Cholesky<T> {
             SymmetricOrdering::Amd,
             CholeskySymbolicParams::default(),
         )
-        .map_err(|e| format!("symbolic Cholesky analysis failed: {e:?}"))?;
+        .map_err(|_| "the analysis of its system's sparsity pattern failed".to_owned())?;
         let factor_req = symbolic.factorize_numeric_llt_scratch::<T>(Par::Seq, Spec::default());
         let solve_req = symbolic.solve_in_place_scratch::<T>(rhs_cols, Par::Seq);
         Ok(Analysis {
@@ -221,7 +221,14 @@ impl<T: Precision> Cholesky<T> {
                 MemStack::new(&mut self.scratch),
                 Spec::default(),
             )
-            .map_err(|e| format!("the matrix is not positive definite ({e})"))?;
+            // NOTE: faer's error names its own types; what the user can act on is the
+            // matrix and its cause, which the caller words from the scene.
+            .map_err(|_| {
+                "its system matrix is not positive definite (the springs' stiffness \
+                 overwhelms the points' mass, or positions are beyond what a 64-bit float \
+                 resolves)"
+                    .to_owned()
+            })?;
         self.factored = true;
         Ok(())
     }

@@ -8,32 +8,93 @@
 //! solver is built, so the solver crates do not probe the system themselves.
 
 use std::fmt::Display;
+use std::path::Path;
 
 use cloth_mesh::{ClothMesh, Vec3};
 use cloth_render::{Mode, Renderer};
 use cloth_solver::SolverEntry;
 use serde_json::Value;
 
-/// The memory a new allocation of this process can have, bytes: Linux's `MemAvailable` (free
-/// memory plus the caches it can drop), or the address-space limit (`ulimit -v`) when that is
-/// lower. `None` where neither is known (other systems, or a `/proc` that cannot be read, and no
-/// limit); only the allocations themselves can fail there.
-#[must_use]
-pub fn available_memory() -> Option<u64> {
-    let system = std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|text| mem_available(&text));
-    match (system, address_space_limit()) {
-        (Some(a), Some(b)) => Some(a.min(b)),
-        (a, b) => a.or(b),
+/// Every limit on the memory a new allocation of this process can have, bytes; `None` where a
+/// limit does not apply or is not known.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Limits {
+    /// Linux's `MemAvailable`: free memory plus the caches it can drop. Swap may stretch it,
+    /// so `--max-memory` overrides it.
+    pub system: Option<u64>,
+    /// The address-space limit (`ulimit -v`, `RLIMIT_AS`) less what is mapped already (the
+    /// program, its libraries, thread stacks): past it an allocation fails, whatever swap
+    /// there is.
+    pub address_space: Option<u64>,
+    /// The smallest memory limit less usage of the control groups (v1 or v2) the process runs
+    /// in and their ancestors: past it the kernel kills the process.
+    pub cgroup: Option<u64>,
+}
+
+impl Limits {
+    /// The limits this process lives under now.
+    #[must_use]
+    pub fn now() -> Self {
+        let read = |p: &str| std::fs::read_to_string(p).ok();
+        let system = read("/proc/meminfo").and_then(|t| kib_line(&t, "MemAvailable:"));
+        let mapped = read("/proc/self/status").and_then(|t| kib_line(&t, "VmSize:"));
+        let address_space = address_space_limit().map(|l| l.saturating_sub(mapped.unwrap_or(0)));
+        let cgroup =
+            read("/proc/self/cgroup").and_then(|t| cgroup_room(&t, Path::new("/sys/fs/cgroup")));
+        Self {
+            system,
+            address_space,
+            cgroup,
+        }
+    }
+
+    /// The tightest limit, with its description and what to change, counting `system` only
+    /// when `with_system` (not with `--max-memory`).
+    fn tightest(&self, with_system: bool) -> Option<(u64, String, &'static str)> {
+        let mut all = Vec::new();
+        if with_system && let Some(a) = self.system {
+            all.push((
+                a,
+                format!("the {} of memory available", human_bytes(a)),
+                "free some memory (--max-memory SIZE sets the limit instead)",
+            ));
+        }
+        if let Some(a) = self.address_space {
+            all.push((
+                a,
+                format!(
+                    "the {} the address-space limit (ulimit -v) leaves",
+                    human_bytes(a)
+                ),
+                "raise the address-space limit (ulimit -v)",
+            ));
+        }
+        if let Some(a) = self.cgroup {
+            all.push((
+                a,
+                format!(
+                    "the {} the control group's memory limit leaves",
+                    human_bytes(a)
+                ),
+                "raise the control group's memory limit",
+            ));
+        }
+        all.into_iter().min_by_key(|(a, _, _)| *a)
     }
 }
 
-/// `MemAvailable` in `/proc/meminfo`'s text, bytes.
-fn mem_available(meminfo: &str) -> Option<u64> {
-    let line = meminfo.lines().find(|l| l.starts_with("MemAvailable:"))?;
+/// The memory a new allocation of this process can have, bytes: the tightest of [`Limits`].
+/// `None` where none is known (other systems); only the allocations themselves can fail there.
+#[must_use]
+pub fn available_memory() -> Option<u64> {
+    Limits::now().tightest(true).map(|(a, _, _)| a)
+}
+
+/// The value of a `KEY:  N kB` line of a `/proc` file, bytes.
+fn kib_line(text: &str, key: &str) -> Option<u64> {
+    let line = text.lines().find(|l| l.starts_with(key))?;
     let kib: u64 = line
-        .trim_start_matches("MemAvailable:")
+        .trim_start_matches(key)
         .trim()
         .trim_end_matches("kB")
         .trim()
@@ -42,9 +103,60 @@ fn mem_available(meminfo: &str) -> Option<u64> {
     kib.checked_mul(1024)
 }
 
-/// The soft limit on this process's address space, bytes, when there is one. It counts what
-/// is mapped already (the program, its libraries, thread stacks), so a run near it may still
-/// fail to allocate; the allocations themselves report that.
+/// A control group's limit that means "none": v1 writes the largest page-aligned `i64`.
+const NO_CGROUP_LIMIT: u64 = 1 << 60;
+
+/// The room left under the memory limits of the control groups named in `proc_cgroup` (the
+/// text of `/proc/self/cgroup`) and their ancestors, under the cgroup file systems at `root`:
+/// the smallest `limit - usage`. v2 (`0::/path`) reads `memory.max` and `memory.current`, v1
+/// (`N:memory:/path`) `memory.limit_in_bytes` and `memory.usage_in_bytes`. A group whose files
+/// are not visible (a container sees its own group as the root) counts as no limit.
+fn cgroup_room(proc_cgroup: &str, root: &Path) -> Option<u64> {
+    let mut room: Option<u64> = None;
+    for line in proc_cgroup.lines() {
+        let mut parts = line.splitn(3, ':');
+        let (Some(id), Some(controllers), Some(path)) = (parts.next(), parts.next(), parts.next())
+        else {
+            continue;
+        };
+        let (base, limit_file, usage_file) = if id == "0" && controllers.is_empty() {
+            let unified = root.join("unified");
+            let base = if unified.join("cgroup.controllers").exists() {
+                unified
+            } else {
+                root.to_owned()
+            };
+            (base, "memory.max", "memory.current")
+        } else if controllers.split(',').any(|c| c == "memory") {
+            (
+                root.join("memory"),
+                "memory.limit_in_bytes",
+                "memory.usage_in_bytes",
+            )
+        } else {
+            continue;
+        };
+        // The group itself and each ancestor up to the root: a parent's limit binds too.
+        let mut dir = base.join(path.trim_start_matches('/'));
+        loop {
+            let number = |f: &str| {
+                std::fs::read_to_string(dir.join(f))
+                    .ok()
+                    .and_then(|t| t.trim().parse::<u64>().ok())
+            };
+            if let Some(limit) = number(limit_file).filter(|&l| l < NO_CGROUP_LIMIT) {
+                let left = limit.saturating_sub(number(usage_file).unwrap_or(0));
+                room = Some(room.map_or(left, |r| r.min(left)));
+            }
+            if dir == base || !dir.pop() || !dir.starts_with(&base) {
+                break;
+            }
+        }
+    }
+    room
+}
+
+/// The soft limit on this process's address space, bytes, when there is one.
 #[cfg(unix)]
 fn address_space_limit() -> Option<u64> {
     use nix::sys::resource::{RLIM_INFINITY, Resource, getrlimit};
@@ -213,16 +325,19 @@ pub fn check(
     need: Need,
     (max, smaller): (Option<u64>, &str),
 ) -> anyhow::Result<()> {
-    let (limit, what) = match max {
-        Some(max) => (
+    // NOTE: `--max-memory` replaces only the system's available memory (swap may stretch it);
+    // an address-space or control-group limit aborts or kills a run past it, whatever is asked.
+    let limits = Limits::now();
+    let hard = limits.tightest(false);
+    let (limit, what, raise) = match (max, hard) {
+        (Some(max), Some(hard)) if hard.0 < max => hard,
+        (Some(max), _) => (
             max,
             format!("the --max-memory limit of {}", human_bytes(max)),
+            "raise --max-memory",
         ),
-        None => match available_memory() {
-            Some(available) => (
-                available,
-                format!("the {} of memory available", human_bytes(available)),
-            ),
+        (None, _) => match limits.tightest(true) {
+            Some(t) => t,
             None => return Ok(()),
         },
     };
@@ -233,10 +348,6 @@ pub fn check(
         format!(", {} for drawing", human_bytes(need.drawing))
     } else {
         String::new()
-    };
-    let raise = match max {
-        Some(_) => "raise --max-memory",
-        None => "free some memory (--max-memory SIZE sets the limit instead)",
     };
     anyhow::bail!(
         "{origin}: {who} on this {} x {} cloth needs about {} ({} for the solver, {} for the \
@@ -257,9 +368,49 @@ mod tests {
     #[test]
     fn mem_available_is_read_in_bytes_from_meminfo() {
         let text = "MemTotal:       16318852 kB\nMemFree:  1 kB\nMemAvailable:    8159426 kB\n";
+        let mem_available = |t: &str| kib_line(t, "MemAvailable:");
         assert_eq!(mem_available(text), Some(8_159_426 * 1024));
         assert_eq!(mem_available("MemTotal: 5 kB\n"), None);
         assert_eq!(mem_available("MemAvailable: lots kB\n"), None);
+    }
+
+    fn write(dir: &Path, file: &str, text: &str) {
+        std::fs::create_dir_all(dir).unwrap();
+        std::fs::write(dir.join(file), text).unwrap();
+    }
+
+    #[test]
+    fn a_cgroup_v1_limit_of_the_group_or_an_ancestor_leaves_its_room() {
+        let root = tempfile::tempdir().unwrap();
+        let memory = root.path().join("memory");
+        let group = memory.join("jobs/run7");
+        write(&group, "memory.limit_in_bytes", "9223372036854771712\n");
+        write(&group, "memory.usage_in_bytes", "100\n");
+        let text = "4:memory:/jobs/run7\n3:cpuset:/\n0::/\n";
+        // No limit anywhere (v1's "none" is the largest page-aligned i64).
+        assert_eq!(cgroup_room(text, root.path()), None);
+        // The parent's limit binds the child.
+        write(&memory.join("jobs"), "memory.limit_in_bytes", "4096000\n");
+        write(&memory.join("jobs"), "memory.usage_in_bytes", "96000\n");
+        assert_eq!(cgroup_room(text, root.path()), Some(4_000_000));
+        // A tighter limit on the group itself wins.
+        write(&group, "memory.limit_in_bytes", "1000\n");
+        assert_eq!(cgroup_room(text, root.path()), Some(900));
+    }
+
+    #[test]
+    fn a_cgroup_v2_limit_is_read_from_memory_max_and_max_means_none() {
+        let root = tempfile::tempdir().unwrap();
+        let group = root.path().join("user.slice/app");
+        write(root.path(), "cgroup.controllers", "memory\n");
+        write(&group, "memory.max", "max\n");
+        write(&group, "memory.current", "5\n");
+        assert_eq!(cgroup_room("0::/user.slice/app\n", root.path()), None);
+        write(&group, "memory.max", "2000000000\n");
+        assert_eq!(
+            cgroup_room("0::/user.slice/app\n", root.path()),
+            Some(1_999_999_995)
+        );
     }
 
     #[test]

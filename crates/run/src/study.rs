@@ -345,10 +345,11 @@ impl<'a> Run<'a> {
                 "diverged at frame {frame} (t = {:.3} s): {}; {}",
                 *frame as f64 / scene.params.frames_per_sec,
                 d.describe(),
-                d.advice(
-                    &self.variant.choice.entry,
+                crate::headless::divergence_advice(
+                    scene,
                     &scene.params,
-                    scene.mesh.point_mass(scene.params.density)
+                    &self.variant.choice.entry,
+                    d
                 )
             )
         })

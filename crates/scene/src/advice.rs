@@ -102,6 +102,17 @@ pub fn divergence_advice(scene: &Scene, params: &StepParams, explicit: bool) -> 
     }
 }
 
+/// The input of `scene` (with `params`) furthest from the course's cloth, when one is a hundred
+/// times off or more, with what would bring it back: `("cloth.density is 1e-300 kg/m^2, where
+/// the course's cloth has 150", "raise cloth.density")`. A run that made energy from nothing
+/// within the step's stability limit is most often explained by it.
+#[must_use]
+pub fn unusual_value(scene: &Scene, params: &StepParams) -> Option<(String, &'static str)> {
+    let spec = scene.mesh.spec();
+    let area_per_point = spec.width * spec.height / scene.mesh.len().max(1) as f64;
+    out_of_line(params, area_per_point)
+}
+
 /// `cloth.density is 1e-300 kg/m^2, where the course's cloth has 150` for the input furthest
 /// from the course's cloth in the direction that shortens the stable step, when one is a
 /// hundred times off or more, with what would bring it back.

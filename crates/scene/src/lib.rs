@@ -22,10 +22,11 @@ mod overrides;
 mod read;
 mod scene;
 
-pub use advice::divergence_advice;
+pub use advice::{divergence_advice, unusual_value};
 pub use bundled::{BUNDLED, BundledScene, bundled};
 pub use error::SceneError;
 pub use file::{ClothBlock, PlaneBlock, SceneFile, SimulationBlock, SphereBlock};
+pub use number::show;
 pub use overrides::apply_set;
-pub use read::{MAX_SCENE_BYTES, check_scene_path, read_scene_file};
+pub use read::{MAX_SCENE_BYTES, check_scene_path, read_scene_file, special_kind, utf8_text};
 pub use scene::{Scene, load, parse, shadowing_file};

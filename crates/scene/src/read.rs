@@ -19,8 +19,9 @@ use crate::SceneError;
 /// The largest scene file read, in bytes (64 MiB).
 pub const MAX_SCENE_BYTES: u64 = 64 * 1024 * 1024;
 
-/// What a path is, in words, when it is not a regular file; `None` for a regular file.
-fn special_kind(meta: &Metadata) -> Option<&'static str> {
+/// What a path is, in words, when it is not a regular file; `None` for a regular file. Shared
+/// with the other files clothsim reads (a state to carry on from), so they are refused alike.
+pub fn special_kind(meta: &Metadata) -> Option<&'static str> {
     let t = meta.file_type();
     if t.is_file() {
         return None;
@@ -117,25 +118,34 @@ pub fn read_scene_file(path: &Path) -> Result<String, SceneError> {
 }
 
 /// The UTF-8 text of `bytes`, without a byte-order mark.
-fn decode(path: &Path, mut bytes: Vec<u8>) -> Result<String, SceneError> {
-    let not_text = |reason: String| SceneError::NotText {
+fn decode(path: &Path, bytes: Vec<u8>) -> Result<String, SceneError> {
+    utf8_text(bytes).map_err(|reason| SceneError::NotText {
         path: path.to_owned(),
         reason,
-    };
+    })
+}
+
+/// The UTF-8 text of `bytes` without a UTF-8 byte-order mark, or what the bytes are instead
+/// (UTF-16 text, or the first byte that is not UTF-8), in words. Shared with the other files
+/// clothsim reads, so they get the same message.
+///
+/// # Errors
+/// The reason the bytes are not UTF-8 text.
+pub fn utf8_text(mut bytes: Vec<u8>) -> Result<String, String> {
     if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
-        return Err(not_text(
+        return Err(
             "it is UTF-16 text (it starts with a UTF-16 byte-order mark); save it as UTF-8"
                 .to_owned(),
-        ));
+        );
     }
     if bytes.starts_with(&[0xEF, 0xBB, 0xBF]) {
         bytes.drain(..3);
     }
     String::from_utf8(bytes).map_err(|e| {
-        not_text(format!(
+        format!(
             "it is not UTF-8 text (byte {} is not valid UTF-8)",
             e.utf8_error().valid_up_to() + 1
-        ))
+        )
     })
 }
 

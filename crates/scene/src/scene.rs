@@ -195,19 +195,29 @@ pub fn parse(text: &str, origin: &str, sets: &[String]) -> Result<Scene, SceneEr
     let file: SceneFile = if sets.is_empty() {
         // Straight from the text, so type errors keep their line and column.
         let de = &mut serde_json::Deserializer::from_str(text);
-        let file =
-            serde_path_to_error::deserialize(&mut *de).map_err(|e| field_error(origin, e, true))?;
+        let file = serde_path_to_error::deserialize(&mut *de).map_err(|e| {
+            // A list where an object belongs would be read as the fields in order, with
+            // errors that make no sense: said by its shape instead.
+            serde_json::from_str::<Value>(text)
+                .ok()
+                .and_then(|v| shape_error(origin, &v))
+                .unwrap_or_else(|| field_error(origin, e, Typed::Text(text)))
+        })?;
         de.end().map_err(|e| syntax_error(origin, &e))?;
         file
     } else {
         let de = &mut serde_json::Deserializer::from_str(text);
-        let mut value: Value =
-            serde_path_to_error::deserialize(&mut *de).map_err(|e| field_error(origin, e, true))?;
+        let mut value: Value = serde_path_to_error::deserialize(&mut *de)
+            .map_err(|e| field_error(origin, e, Typed::Text(text)))?;
         de.end().map_err(|e| syntax_error(origin, &e))?;
         for s in sets {
             apply_set(&mut value, s)?;
         }
-        serde_path_to_error::deserialize(value).map_err(|e| field_error(origin, e, false))?
+        if let Some(e) = shape_error(origin, &value) {
+            return Err(e);
+        }
+        serde_path_to_error::deserialize(value)
+            .map_err(|e| field_error(origin, e, Typed::Sets(sets)))?
     };
     build(file, origin)
 }
@@ -228,16 +238,99 @@ fn syntax_error(origin: &str, e: &serde_json::Error) -> SceneError {
     }
 }
 
+/// Where the text of a value as typed can be found for a message: the scene's text (by the
+/// error's line and column), or the `--set` arguments (by key).
+#[derive(Clone, Copy)]
+enum Typed<'a> {
+    Text(&'a str),
+    Sets(&'a [String]),
+}
+
+/// The blocks of a scene file, which must be objects.
+const BLOCKS: [&str; 4] = ["cloth", "sphere", "plane", "simulation"];
+
+/// An error for a scene whose top level or block is not an object (a list, a number): serde
+/// would read a list as the fields in order and report nonsense about them.
+fn shape_error(origin: &str, value: &Value) -> Option<SceneError> {
+    let field = |key: &str, found: &Value, what: &str| SceneError::Field {
+        origin: origin.to_owned(),
+        key: key.to_owned(),
+        message: format!("invalid type: {}, expected {what}", kind_of(found)),
+        location: None,
+    };
+    let Some(top) = value.as_object() else {
+        return Some(field(
+            ".",
+            value,
+            "an object with the keys cloth and optionally sphere, plane, simulation and \
+             description",
+        ));
+    };
+    BLOCKS.iter().find_map(|&key| match top.get(key) {
+        Some(v @ (Value::Array(_) | Value::Bool(_) | Value::Number(_) | Value::String(_))) => {
+            Some(field(key, v, "an object"))
+        }
+        _ => None,
+    })
+}
+
+/// A JSON value's kind in words.
+fn kind_of(v: &Value) -> &'static str {
+    match v {
+        Value::Null => "null",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Array(_) => "a list",
+        Value::Object(_) => "an object",
+    }
+}
+
+/// The number typed at 1-based `line` and `column` of `text`: the run of number characters
+/// that ends at or touches the column (where the parser stopped).
+fn typed_at(text: &str, line: usize, column: usize) -> Option<String> {
+    let chars: Vec<char> = text.lines().nth(line.checked_sub(1)?)?.chars().collect();
+    let numberish = |c: char| c.is_ascii_digit() || matches!(c, '-' | '+' | '.' | 'e' | 'E');
+    let mut end = column.min(chars.len());
+    while end < chars.len() && numberish(chars[end]) {
+        end += 1;
+    }
+    let mut start = end;
+    while start > 0 && numberish(chars[start - 1]) {
+        start -= 1;
+    }
+    (start < end).then(|| chars[start..end].iter().collect())
+}
+
 fn field_error(
     origin: &str,
     e: serde_path_to_error::Error<serde_json::Error>,
-    located: bool,
+    typed: Typed<'_>,
 ) -> SceneError {
     let path = e.path().to_string();
     let inner = e.into_inner();
     let full = inner.to_string();
     let message = full.split(" at line ").next().unwrap_or(&full).to_owned();
+    let located = matches!(typed, Typed::Text(_));
     let location = (located && inner.line() > 0).then(|| (inner.line(), inner.column()));
+    // A number shown by the parser is its 64-bit float reading (18446744073709551616 becomes
+    // 1.8446744073709552e+19): show it as typed.
+    let as_typed = match typed {
+        Typed::Text(text) => typed_at(text, inner.line(), inner.column()),
+        Typed::Sets(sets) => sets.iter().rev().find_map(|s| {
+            let (key, value) = s.split_once('=')?;
+            (key.trim() == path).then(|| value.trim().to_owned())
+        }),
+    };
+    let message = match (message.split_once('`'), as_typed) {
+        (Some((before, rest)), Some(typed))
+            if before.ends_with("floating point ") || before.ends_with("integer ") =>
+        {
+            let after = rest.split_once('`').map_or("", |(_, a)| a);
+            format!("{before}`{typed}`{after}")
+        }
+        _ => message,
+    };
     // A number too large for an f64 is found while its key is being read: name the key.
     if message == "number out of range" && path != "." {
         return SceneError::Field {
@@ -260,13 +353,59 @@ fn field_error(
     }
 }
 
-/// serde's type names in words a scene's author uses.
-fn plain_types(message: &str) -> String {
-    message
+/// serde's type names in words a scene's author uses: no Rust type appears in a message.
+pub(crate) fn plain_types(message: &str) -> String {
+    let message = message
         .replace("expected f64", "expected a number")
-        .replace("expected u64", "expected a whole number >= 0")
+        .replace(
+            "expected u64",
+            "expected a whole number from 0 to 18446744073709551615",
+        )
         .replace("expected i64", "expected a whole number")
-        .replace("expected u32", "expected a whole number >= 0")
+        .replace(
+            "expected u32",
+            "expected a whole number from 0 to 4294967295",
+        )
+        .replace("expected usize", "expected a whole number >= 0")
+        .replace("expected u8", "expected a whole number from 0 to 255")
+        .replace("expected a boolean", "expected true or false")
+        .replace("invalid type: map", "invalid type: an object")
+        .replace("invalid type: sequence", "invalid type: a list")
+        .replace("expected a sequence", "expected a list")
+        .replace("expected a map", "expected an object")
+        .replace("unit value", "null");
+    // `struct Name with N elements`, `enum Name`, `tuple struct Name`: a Rust type's name.
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message.as_str();
+    while let Some(i) = ["tuple struct ", "struct ", "enum "]
+        .iter()
+        .filter_map(|w| rest.find(w).map(|i| (i, *w)))
+        .min()
+        .map(|(i, w)| (i, w.len()))
+    {
+        let (at, skip) = i;
+        out.push_str(&rest[..at]);
+        let after = &rest[at + skip..];
+        let name_end = after
+            .find(|c: char| !(c.is_alphanumeric() || c == '_'))
+            .unwrap_or(after.len());
+        let mut tail = &after[name_end..];
+        if let Some(t) = tail.strip_prefix(" with ") {
+            let digits = t.find(|c: char| !c.is_ascii_digit()).unwrap_or(t.len());
+            tail = t[digits..]
+                .strip_prefix(" elements")
+                .or_else(|| t[digits..].strip_prefix(" element"))
+                .unwrap_or(tail);
+        }
+        out.push_str(if skip == "enum ".len() {
+            "one of the allowed values"
+        } else {
+            "an object"
+        });
+        rest = tail;
+    }
+    out.push_str(rest);
+    out.replace("::", " ")
 }
 
 /// `[x, y, z]` as typed (see [`show`]).
@@ -548,7 +687,12 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         num_height_points: nh,
         // NOTE: the course's loader reads the thickness into a 32-bit float (0.0095 becomes
         // 0.00949999969), and self-collision's reach is twice that value.
-        thickness: f64::from(c.thickness as f32),
+        // The bounds were checked on the value as typed; the 32-bit reading of a value at a
+        // bound (1e-9 reads as 9.9999997e-10) is held to it.
+        thickness: f64::from(c.thickness as f32).clamp(
+            *cloth_mesh::EXTENT_RANGE.start(),
+            *cloth_mesh::EXTENT_RANGE.end(),
+        ),
         orientation,
         pinned,
         seed: seed.unwrap_or(GridSpec::default().seed),
@@ -567,11 +711,11 @@ fn build(file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
 
 fn mesh_error(origin: &str, e: &MeshError) -> SceneError {
     // Everything the mesh checks was checked above with key names; this is a backstop.
-    SceneError::Invalid {
+    SceneError::Field {
         origin: origin.to_owned(),
         key: "cloth".to_owned(),
-        value: e.to_string(),
-        allowed: "a valid grid".to_owned(),
+        message: e.to_string(),
+        location: None,
     }
 }
 

@@ -304,3 +304,169 @@ fn a_bare_name_is_the_bundled_scene_and_a_path_is_the_file() {
         "{e}"
     );
 }
+
+/// Words of Rust, not of scenes: a message holding one shows a type name or Debug output.
+const RUST: [&str; 4] = ["struct", "enum", "{ ", "::"];
+
+/// Any value, from strings and object keys that hold no word of [`RUST`] themselves (a
+/// message may echo what was typed).
+fn tame_value() -> impl Strategy<Value = Value> {
+    let leaf = prop_oneof![
+        number(),
+        Just(Value::Null),
+        any::<bool>().prop_map(Value::Bool),
+        prop::sample::select(vec!["", "a", "1.5", "yes", "x y", "-"])
+            .prop_map(|s| Value::String(s.to_owned())),
+    ];
+    leaf.prop_recursive(3, 24, 5, |inner| {
+        prop_oneof![
+            prop::collection::vec(inner.clone(), 0..5).prop_map(Value::Array),
+            prop::collection::vec(
+                (
+                    prop::sample::select(vec!["a", "cloth", "ks", "origin", "radius", "x"]),
+                    inner
+                ),
+                0..3
+            )
+            .prop_map(|kv| Value::Object(
+                kv.into_iter()
+                    .map(|(k, v)| (k.to_owned(), v))
+                    .collect::<Map<_, _>>()
+            )),
+        ]
+    })
+}
+
+/// Whether `text` holds `word` as a word of its own (`struct`, not `enable_structural`).
+fn has_word(text: &str, word: &str) -> bool {
+    let part = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric() || c == '_');
+    text.match_indices(word).any(|(i, _)| {
+        let before = text[..i].chars().next_back();
+        let after = text[i + word.len()..].chars().next();
+        // `{ ` and `::` are marks, not words: any occurrence counts.
+        !word.starts_with(char::is_alphabetic) || !(part(before) || part(after))
+    })
+}
+
+fn assert_no_rust(e: &SceneError) {
+    let text = e.to_string();
+    for word in RUST {
+        assert!(!has_word(&text, word), "{word:?} in: {text}");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 600, ..ProptestConfig::default() })]
+
+    #[test]
+    fn hostile_scene_text_never_shows_a_rust_type_name_or_debug_output(
+        base in 0..BUNDLED.len(),
+        edits in prop::collection::vec(
+            (0..KEYS.len(), prop::option::weighted(0.85, tame_value())),
+            1..6,
+        ),
+        whole in prop::option::weighted(0.1, tame_value()),
+        as_sets in any::<bool>(),
+    ) {
+        let mut v: Value = serde_json::from_str(BUNDLED[base].json).unwrap();
+        let mut sets = Vec::new();
+        for (k, val) in edits {
+            if as_sets {
+                let raw = val.as_ref().map_or_else(|| "null".to_owned(), Value::to_string);
+                sets.push(format!("{}={raw}", KEYS[k]));
+            } else {
+                apply(&mut v, KEYS[k], val);
+            }
+        }
+        // Now and then the whole scene is something else: a list, a number, a string.
+        if let Some(w) = whole {
+            v = w;
+        }
+        prop_assume!(small_enough(&v));
+        let text = serde_json::to_string_pretty(&v).unwrap();
+        if let Err(e) = parse(&text, "gen.json", &sets) {
+            assert_no_rust(&e);
+        }
+    }
+}
+
+#[test]
+fn rust_type_names_are_told_in_a_scene_authors_words() {
+    for (text, expected) in [
+        (
+            "[]",
+            "gen.json: .: invalid type: a list, expected an object with the keys cloth",
+        ),
+        (
+            "7",
+            "gen.json: .: invalid type: a number, expected an object",
+        ),
+        (
+            "{\"cloth\": 5}",
+            "gen.json: cloth: invalid type: a number, expected an object",
+        ),
+        (
+            "{\"cloth\": [1, 2]}",
+            "gen.json: cloth: invalid type: a list, expected an object",
+        ),
+    ] {
+        let e = parse(text, "gen.json", &[]).unwrap_err();
+        assert!(e.to_string().starts_with(expected), "{e}");
+        assert_no_rust(&e);
+    }
+    let e = load("sphere", &["sphere=[1,2]".to_owned()]).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("pinned4: sphere: invalid type: a list, expected an object")
+            || e.to_string()
+                .starts_with("sphere: sphere: invalid type: a list, expected an object"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_number_past_its_type_is_shown_as_typed() {
+    let e = load(
+        "pinned4",
+        &["simulation.seed=18446744073709551616".to_owned()],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("`18446744073709551616`") && !e.contains("1.8446744073709552e+19"),
+        "{e}"
+    );
+    let text = BUNDLED[1].json.replace(
+        "\"cloth\": {",
+        "\"simulation\": {\"seed\": 18446744073709551616},\n  \"cloth\": {",
+    );
+    let e = parse(&text, "seed.json", &[]).unwrap_err().to_string();
+    assert!(
+        e.contains("`18446744073709551616`")
+            && e.contains("expected a whole number from 0 to 18446744073709551615"),
+        "{e}"
+    );
+}
+
+#[test]
+fn thickness_bounds_hold_for_the_value_as_typed() {
+    // The course reads thickness into a 32-bit float, in which 1e-9 is 9.9999997e-10: the
+    // documented minimum must still load, and a value just past it must not.
+    for at_bound in ["1e-9", "1e9"] {
+        let s = load("pinned4", &[format!("cloth.thickness={at_bound}")]).unwrap();
+        assert!(cloth_mesh::EXTENT_RANGE.contains(&s.mesh.spec().thickness));
+    }
+    for past in ["0.9998e-9", "1.0002e9"] {
+        let e = load("pinned4", &[format!("cloth.thickness={past}")])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with(&format!(
+                "pinned4: cloth.thickness is {}",
+                past.replace("0.9998e-9", "9.998e-10")
+                    .replace("1.0002e9", "1000200000")
+            )),
+            "{e}"
+        );
+    }
+}

@@ -15,6 +15,7 @@
 
 mod diagnostics;
 mod disjoint;
+pub mod energy;
 mod error;
 mod reference;
 mod registry;

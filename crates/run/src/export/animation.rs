@@ -184,7 +184,19 @@ impl Animation {
                 width,
                 after,
             } => {
-                output::check_target(&AnimationKind::frame_path(before, *width, after, 0))?;
+                // The last frame's name is the longest; the first's is checked for its folder.
+                let last = sampling.first_frame
+                    + sampling
+                        .samples
+                        .saturating_sub(1)
+                        .saturating_mul(sampling.every);
+                output::check_target(&AnimationKind::frame_path(
+                    before,
+                    *width,
+                    after,
+                    sampling.first_frame,
+                ))?;
+                output::check_target(&AnimationKind::frame_path(before, *width, after, last))?;
                 (None, None)
             }
             AnimationKind::Pc2 | AnimationKind::Mdd => {

@@ -18,7 +18,10 @@
 //!   writable file) or the file's owner cannot be kept, the file is written in place, which is
 //!   not atomic, and [`Written::note`] says so. The bytes past the old end are written first, so
 //!   a full disk is found while the old contents are still whole.
-//! - FIFOs and devices are opened and written as they are.
+//! - FIFOs, devices and sockets are refused before any work ([`check_target`]): a FIFO without
+//!   a reader would block the write forever, and a result is a file.
+//! - Before a run, [`check_target`] proves the write can happen: the name fits with the
+//!   temporary file's suffix and the folder takes a new file (a probe is made and removed).
 
 use std::fs::{self, OpenOptions};
 use std::io::{Read, Seek, SeekFrom, Write};
@@ -40,8 +43,6 @@ pub enum Written {
     Unlinked(String),
     /// In place, not atomically, for the reason given.
     InPlace(String),
-    /// A FIFO or a device, opened and written as it is.
-    Special,
 }
 
 impl Written {
@@ -49,7 +50,7 @@ impl Written {
     pub fn note(&self) -> Option<&str> {
         match self {
             Written::InPlace(why) | Written::Unlinked(why) => Some(why),
-            Written::Replaced | Written::Special => None,
+            Written::Replaced => None,
         }
     }
 
@@ -102,23 +103,82 @@ fn resolve(path: &Path) -> anyhow::Result<PathBuf> {
     )
 }
 
-/// Checks, before any work is done, that `path` can be a result file: not a folder, in a
-/// folder that exists.
+/// The longest file name the common file systems take, bytes.
+const NAME_MAX: usize = 255;
+
+/// Bytes the temporary file's name (`.NAME.XXXXXX`) adds to the result's name.
+const TEMPORARY_EXTRA: usize = 8;
+
+/// What a path is, in words, when it is not a regular file or a folder; `None` otherwise.
+fn special_kind(meta: &fs::Metadata) -> Option<&'static str> {
+    let t = meta.file_type();
+    if t.is_file() || t.is_dir() {
+        return None;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return Some("a FIFO (named pipe)");
+        }
+        if t.is_char_device() {
+            return Some("a character device");
+        }
+        if t.is_block_device() {
+            return Some("a block device");
+        }
+        if t.is_socket() {
+            return Some("a socket");
+        }
+    }
+    Some("not a regular file")
+}
+
+/// Checks, before any work is done, that `path` can be a result file, so a long run never ends
+/// in a write that was bound to fail: not a folder, not a FIFO, device or socket (a FIFO
+/// without a reader would block; results are files), in a folder that exists, with a name
+/// short enough for the temporary file it is first written as, in a folder that takes a new
+/// file of that name (a probe is created and removed). An existing regular file in a folder
+/// that takes no new file passes when it can be opened for writing: it is then written in
+/// place (see the module doc).
 ///
 /// # Errors
 /// Naming `path` and what is wrong, once.
 pub fn check_target(path: &Path) -> anyhow::Result<()> {
     let target = resolve(path)?;
-    if target.is_dir() {
+    let Some(name) = target.file_name() else {
+        bail!("{}: give a file name, such as state.json", path.display());
+    };
+    let bytes = name.as_encoded_bytes().len();
+    if bytes + TEMPORARY_EXTRA > NAME_MAX {
+        bail!(
+            "{}: the file name is {bytes} bytes, too long: it is first written under a temporary \
+             name {TEMPORARY_EXTRA} bytes longer, and file names are limited to {NAME_MAX} bytes, \
+             so at most {} bytes are allowed",
+            path.display(),
+            NAME_MAX - TEMPORARY_EXTRA
+        );
+    }
+    // A path that cannot be looked at (a missing folder, a file used as a folder) is told by
+    // the folder's check below, or by the probe.
+    let existing = fs::metadata(&target).ok();
+    if existing.as_ref().is_some_and(fs::Metadata::is_dir) {
         bail!(
             "{} is a folder; give a file name, such as {}",
             path.display(),
             path.join("state.json").display()
         );
     }
+    if let Some(kind) = existing.as_ref().and_then(special_kind) {
+        bail!(
+            "{} is {kind}; results are written to regular files (without --out a state goes to \
+             standard output, which can be piped)",
+            path.display()
+        );
+    }
     let dir = parent_of(&target);
     match fs::metadata(dir) {
-        Ok(m) if m.is_dir() => Ok(()),
+        Ok(m) if m.is_dir() => {}
         Ok(_) => bail!("{}: {} is not a folder", path.display(), dir.display()),
         Err(e) => bail!(
             "{}: the folder {} cannot be used: {e}",
@@ -126,6 +186,69 @@ pub fn check_target(path: &Path) -> anyhow::Result<()> {
             dir.display()
         ),
     }
+    probe(path, dir, name, existing.is_some())
+}
+
+/// Creates and removes a file in `dir` named like the temporary file of a result called
+/// `name` (`.NAME.XXXXXX`), proving the folder takes it. When it does not and the result
+/// exists, the result must open for writing (it will be written in place).
+fn probe(path: &Path, dir: &Path, name: &std::ffi::OsStr, exists: bool) -> anyhow::Result<()> {
+    use std::sync::atomic::{AtomicU32, Ordering};
+    static COUNT: AtomicU32 = AtomicU32::new(0);
+    let mut last = None;
+    for _ in 0..16 {
+        // Six characters, as the temporary file's suffix has: unique within this process by
+        // the counter, between processes by the process id.
+        let n =
+            u64::from(std::process::id()) * 4096 + u64::from(COUNT.fetch_add(1, Ordering::Relaxed));
+        let mut probe_name = std::ffi::OsString::from(".");
+        probe_name.push(name);
+        probe_name.push(format!(".{:06}", n % 1_000_000));
+        let probe_path = dir.join(&probe_name);
+        match OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&probe_path)
+        {
+            Ok(f) => {
+                drop(f);
+                fs::remove_file(&probe_path).with_context(|| {
+                    format!("{}: cannot remove the probe file", probe_path.display())
+                })?;
+                return Ok(());
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
+            Err(e) => {
+                use std::io::ErrorKind::{PermissionDenied, ReadOnlyFilesystem};
+                if exists && matches!(e.kind(), PermissionDenied | ReadOnlyFilesystem) {
+                    // Written in place: the file itself must take the bytes.
+                    return OpenOptions::new()
+                        .write(true)
+                        .open(path)
+                        .map(drop)
+                        .with_context(|| {
+                            format!(
+                                "{}: the folder {} does not take new files ({e}) and the file \
+                                 cannot be written either",
+                                path.display(),
+                                dir.display()
+                            )
+                        });
+                }
+                return Err(anyhow::Error::new(e).context(format!(
+                    "{}: cannot create a file in the folder {}; choose a folder you can write to",
+                    path.display(),
+                    dir.display()
+                )));
+            }
+        }
+    }
+    bail!(
+        "{}: cannot create a probe file in {}: every name tried is taken ({})",
+        path.display(),
+        dir.display(),
+        last.map_or_else(String::new, |e| e.to_string())
+    )
 }
 
 fn parent_of(path: &Path) -> &Path {
@@ -194,10 +317,6 @@ fn in_place_instead(path: &Path, target: &Path, e: &std::io::Error) -> Option<St
 /// permission, a full disk.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<Written> {
     let (target, existing) = target_of(path)?;
-    if existing.as_ref().is_some_and(|m| !m.is_file()) {
-        write_in_place(path, &target, bytes)?;
-        return Ok(Written::Special);
-    }
     let mut file = match open_temporary(&target, true) {
         Ok(f) => f,
         Err(e) => {
@@ -270,12 +389,6 @@ impl StreamFile {
     /// regular file).
     pub fn create(path: &Path) -> anyhow::Result<Self> {
         let (target, existing) = target_of(path)?;
-        if existing.as_ref().is_some_and(|m| !m.is_file()) {
-            bail!(
-                "{}: not a regular file; this output is written to a file, then put in place",
-                path.display()
-            );
-        }
         let cannot_create = |e: std::io::Error| {
             anyhow::Error::new(e).context(format!(
                 "{}: cannot create a file in {}",
@@ -370,21 +483,24 @@ impl Seek for StreamFile {
 /// needs no new space on a file system that writes in place (not on a copy-on-write one).
 fn write_in_place(path: &Path, target: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let cannot = || format!("{}: cannot write", path.display());
-    let mut f = OpenOptions::new()
-        .write(true)
-        .create(true)
-        .truncate(false)
+    let mut options = OpenOptions::new();
+    options.write(true).create(true).truncate(false);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        // NOTE: should the path have become a FIFO since it was checked, a non-blocking open
+        // fails at once instead of waiting for a reader; a regular file ignores the flag.
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    let mut f = options
         .open(target)
         .with_context(|| format!("{}: cannot open for writing", path.display()))?;
-    // A FIFO or a terminal has no old contents to keep and cannot be synced.
     let old = match f.metadata() {
         Ok(m) if m.is_file() => m.len(),
-        _ => {
-            return f
-                .write_all(bytes)
-                .and_then(|()| f.flush())
-                .with_context(cannot);
-        }
+        _ => bail!(
+            "{}: not a regular file; results are written to files",
+            path.display()
+        ),
     };
     let keep = usize::try_from(old).map_or(bytes.len(), |old| old.min(bytes.len()));
     let (head, tail) = bytes.split_at(keep);
@@ -522,13 +638,53 @@ mod tests {
 
     #[cfg(target_os = "linux")]
     #[test]
-    fn a_write_in_place_that_meets_a_full_device_changes_nothing() {
-        // /dev/full is a device, written as it is: the error comes back, naming the path.
+    fn a_device_or_a_fifo_is_refused_before_anything_is_written_or_waited_for() {
+        let e = format!("{:#}", check_target(Path::new("/dev/full")).unwrap_err());
+        assert!(e.contains("/dev/full is a character device"), "{e}");
         let e = format!(
             "{:#}",
-            write_atomic(Path::new("/dev/full"), b"x").unwrap_err()
+            write_atomic(Path::new("/dev/null"), b"x").unwrap_err()
         );
-        assert!(e.contains("/dev/full: cannot write"), "{e}");
+        assert!(e.contains("/dev/null is a character device"), "{e}");
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("out.json");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap();
+        assert!(made.success());
+        // Opened for writing without a reader, a FIFO would block forever.
+        let e = format!("{:#}", write_atomic(&fifo, b"x").unwrap_err());
+        assert!(e.contains("out.json is a FIFO (named pipe)"), "{e}");
+        let e = format!("{:#}", StreamFile::create(&fifo).unwrap_err());
+        assert!(e.contains("is a FIFO"), "{e}");
+    }
+
+    #[test]
+    fn a_name_that_leaves_no_room_for_the_temporary_suffix_is_refused_before_the_run() {
+        let dir = tempfile::tempdir().unwrap();
+        // 247 bytes and the temporary's 8 make 255, the limit: written whole.
+        let fits = dir.path().join(format!("{}.json", "a".repeat(242)));
+        check_target(&fits).unwrap();
+        assert_eq!(write_atomic(&fits, b"x").unwrap(), Written::Replaced);
+        assert_eq!(fs::read(&fits).unwrap(), b"x");
+        // One byte more cannot be written atomically on a file system with 255-byte names:
+        // said before the run, not after it.
+        let long = dir.path().join(format!("{}.json", "a".repeat(243)));
+        let e = format!("{:#}", check_target(&long).unwrap_err());
+        assert!(
+            e.contains("the file name is 248 bytes, too long") && e.contains("at most 247 bytes"),
+            "{e}"
+        );
+        // Multi-byte characters count as their bytes: 124 two-byte letters are 248 bytes.
+        let accented = dir.path().join("\u{e9}".repeat(124));
+        let e = format!("{:#}", check_target(&accented).unwrap_err());
+        assert!(e.contains("248 bytes"), "{e}");
+        // The probe leaves nothing behind.
+        assert_eq!(
+            names(dir.path()),
+            [fits.file_name().unwrap().to_str().unwrap()]
+        );
     }
 
     #[cfg(unix)]
