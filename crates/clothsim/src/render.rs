@@ -603,6 +603,15 @@ fn simulate(
     };
     let result = frames();
     progress.finish();
+    if let Ok(None) = &result
+        && let Some(warning) =
+            cloth_run::headless::stretch_warning(scene, &run.settings.params, &run.state)
+    {
+        // Nowhere else to say it; a lost warning does not change the frames printed.
+        use std::io::Write as _;
+        let program = cloth_run::headless::program_name();
+        let _ = writeln!(std::io::stderr(), "{program}: warning: {warning}");
+    }
     result
 }
 

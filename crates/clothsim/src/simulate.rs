@@ -324,7 +324,8 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     }
     if let Some(warning) = headless::stretch_warning(&scene, &params, state) {
         // Nowhere else to say it; a lost warning does not change the result.
-        let _ = writeln!(std::io::stderr(), "clothsim: warning: {warning}");
+        let program = headless::program_name();
+        let _ = writeln!(std::io::stderr(), "{program}: warning: {warning}");
     }
     if let Some(a) = animation {
         return a.finish();
@@ -474,7 +475,8 @@ fn run_study(args: &Args, registry: &Registry, format: &Format) -> anyhow::Resul
         let scene = &run.variant.scene;
         if let Some(warning) = headless::stretch_warning(scene, &scene.params, run.state()) {
             let title = &run.variant.title;
-            let _ = writeln!(std::io::stderr(), "clothsim: warning: {title}: {warning}");
+            let program = headless::program_name();
+            let _ = writeln!(std::io::stderr(), "{program}: warning: {title}: {warning}");
         }
     }
 

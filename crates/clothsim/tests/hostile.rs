@@ -581,6 +581,23 @@ fn a_run_that_outruns_the_stretch_limit_says_so_on_stderr() {
         ) && e.contains("simulation.gravity of 1.0e6 m/s^2"),
         "{e}"
     );
+    // render says it too, after its frames.
+    let o = clothsim(&[
+        "render",
+        "pinned4",
+        "--frames",
+        "30",
+        "--every",
+        "30",
+        "--set",
+        "simulation.gravity=[0,-1e6,0]",
+    ]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("warning: pinned4: the stretch limit is on"),
+        "{e}"
+    );
     // The course's cloth under the limit: no warning.
     let o = clothsim(&["simulate", "pinned4", "--frames", "30"]);
     assert!(o.status.success());

@@ -123,8 +123,9 @@ impl StateFile {
             // Nowhere else to say it; a lost warning does not change the run.
             let _ = writeln!(
                 std::io::stderr(),
-                "clothsim: warning: {}: the state has no last_positions, so the cloth starts \
+                "{}: warning: {}: the state has no last_positions, so the cloth starts \
                  at rest from its positions (the motion it had is not carried on)",
+                crate::headless::program_name(),
                 at()
             );
         }
