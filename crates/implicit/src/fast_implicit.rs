@@ -125,16 +125,19 @@
 //!
 //! [`ImplicitEuler`]: crate::ImplicitEuler
 
-use cloth_mesh::{ClothMesh, ClothState, SpringKind, Vec3};
+use cloth_mesh::{ClothMesh, ClothState, SURFACE_OFFSET, SpringKind, Vec3};
 use cloth_solver::{
     Collider, MAX_STRETCH, SolveError, Solver, SpatialHash, StepParams, StepReport,
     max_stretch_ratio,
 };
 
 use crate::cholesky::Cholesky;
-use crate::commit::{commit, hold_still, predict};
+use crate::commit::{hold_still, predict};
 use crate::contact::{Contacts, touches};
+use crate::lbfgs::{Lbfgs, Problem};
 use crate::memory::{Allocation, try_filled};
+use crate::objective::{Objective, StepProblem, surface_distance};
+use crate::self_contact::SelfContacts;
 use crate::topology::{NONE, Topology};
 
 /// By default the local/global iterations of a step stop once a global step moves no point
@@ -189,7 +192,7 @@ fn penalty_scale(level: u32) -> f64 {
 }
 
 /// Local/global iterations per step of [`FastImplicit::new`], at most.
-pub const DEFAULT_ITERATIONS: u32 = 10;
+pub const DEFAULT_ITERATIONS: u32 = 20;
 
 /// The weight of the stretch limit's projection term of a spring of stiffness `k`, N/m, for a
 /// step whose mass term per point is `inertia = m (1 + c h) / h^2`: `k + inertia`.
@@ -243,6 +246,9 @@ pub struct FastImplicit {
     /// it rests on.
     point_inertia: Vec<f64>,
     hash: SpatialHash,
+    /// The pairs of points self-collision acts on in the current step.
+    self_contacts: SelfContacts,
+    lbfgs: Lbfgs,
 }
 
 impl Default for FastImplicit {
@@ -270,6 +276,8 @@ struct System {
     key: Option<MatrixKey>,
     /// The free points' mass terms the factor was computed with.
     inertia: Vec<f64>,
+    /// The matrix's diagonal, per free point, N/m: the stiffness of a point's contact term.
+    diag: Vec<f64>,
 }
 
 const KINDS: [SpringKind; 3] = [
@@ -308,9 +316,11 @@ impl FastImplicit {
             raised_from: None,
             windows_at_level: 0,
             held: false,
-            contacts: Contacts::default(),
+            contacts: Contacts::approaching(),
             point_inertia: Vec::new(),
             hash: SpatialHash::default(),
+            self_contacts: SelfContacts::default(),
+            lbfgs: Lbfgs::default(),
         }
     }
 
@@ -490,6 +500,7 @@ impl FastImplicit {
                 values,
                 key: None,
                 inertia: Vec::new(),
+                diag: Vec::new(),
             });
         }
         if self.mu.len() != mesh.springs().len() {
@@ -548,6 +559,8 @@ impl FastImplicit {
             }
         }
         sys.chol.factorize(&sys.values, 0.0).map_err(method_error)?;
+        sys.diag.clear();
+        sys.diag.extend(sys.col_ptr[..topo.free()].iter().map(|&c| sys.values[c]));
         sys.key = Some(key);
         Ok(())
     }
@@ -561,15 +574,6 @@ fn spring_weight(params: &StepParams, kind: SpringKind, inertia: f64, level: u32
         k + limit_weight(k, inertia) * penalty_scale(level)
     } else {
         k
-    }
-}
-
-/// The position of `kind` in [`KINDS`].
-fn kind_index(kind: SpringKind) -> usize {
-    match kind {
-        SpringKind::Structural => 0,
-        SpringKind::Shearing => 1,
-        SpringKind::Bending => 2,
     }
 }
 
@@ -644,8 +648,6 @@ impl Solver for FastImplicit {
         let Some(sys) = self.system.as_mut() else {
             return Err(method_error("no linear system was built".to_owned()));
         };
-        let topo = &sys.topo;
-        let n = topo.free();
         let weight = params.gravity * mass;
         if !params.stretch_limit {
             self.mu.fill(Vec3::zeros());
@@ -658,115 +660,113 @@ impl Solver for FastImplicit {
             }
         });
 
-        // NOTE: the iterations only ever lower the incremental potential from their start, so
-        // they start from whichever of the prediction and the step's start has the lower one:
-        // then even a truncated step ends with an energy no higher than the start's (see the
+        let pair_stiffness = params.stiffness(SpringKind::Structural) + inertia;
+        let reach = 2.0 * mesh.spec().thickness;
+        if params.self_collision {
+            self.self_contacts
+                .find(mesh, &[&state.positions, &self.y], reach);
+        } else {
+            self.self_contacts.clear();
+        }
+        let System {
+            topo, chol, diag, ..
+        } = sys;
+        let free = &topo.free_points;
+        let mut problem = StepProblem {
+            objective: Objective {
+                mesh,
+                topo,
+                params,
+                colliders,
+                inertia: &self.point_inertia,
+                y: &self.y,
+                x0: &state.positions,
+                weight,
+                limits,
+                mu: &mut self.mu,
+                contact_stiffness: diag,
+                pairs: self.self_contacts.pairs(),
+                pair_stiffness,
+                reach,
+            },
+            chol,
+            rhs: &mut self.rhs,
+        };
+        // NOTE: the minimisation only ever lowers the incremental potential from its start, so
+        // it starts from whichever of the prediction and the step's start has the lower one:
+        // then even a truncated step ends with a potential no higher than the start's (see the
         // module doc).
-        let (at_start, at_prediction) = potentials(
-            mesh,
-            params,
-            &self.point_inertia,
-            weight,
-            &state.positions,
-            &self.y,
-        );
+        let at_start = problem.evaluate(&state.positions, None);
+        let at_prediction = problem.evaluate(&self.y, None);
         if at_start < at_prediction {
             self.x.clone_from(&state.positions);
         } else {
             self.x.clone_from(&self.y);
         }
-        self.rhs.resize(3 * n, 0.0);
-        let starts = mesh.start_positions();
+        let outcome = self
+            .lbfgs
+            .minimise(&mut self.x, free, max_iterations, self.tolerance, &mut problem)
+            .map_err(method_error)?;
+        let iterations = outcome.iterations;
 
-        let mut residual = 0.0;
-        let mut iterations = 0;
-        while iterations < max_iterations {
-            iterations += 1;
-            // Local step (and the limit's multiplier update) and right-hand side together.
-            for (f, &p) in topo.free_points.iter().enumerate() {
-                let b = self.y[p as usize] * self.point_inertia[p as usize] + weight;
-                for axis in 0..3 {
-                    self.rhs[axis * n + f] = b[axis];
-                }
-            }
-            for (i, s) in mesh.springs().iter().enumerate() {
-                let (a, b) = (s.a as usize, s.b as usize);
-                let (fa, fb) = (topo.free_index[a], topo.free_index[b]);
-                if fa == NONE && fb == NONE {
-                    continue;
-                }
-                let k = params.stiffness(s.kind);
-                let w = limits[kind_index(s.kind)];
-                if k == 0.0 && w == 0.0 {
-                    continue;
-                }
-                let d = self.x[b] - self.x[a];
-                let len = d.norm();
-                // NOTE: coincident ends have no direction; fall back on the rest direction.
-                let u = if len > 0.0 {
-                    d / len
-                } else {
-                    (starts[b] - starts[a]) / s.rest
-                };
-                // The weighted targets of the two terms: the spring's p (its rest length along
-                // u) and the limit's q.
-                let mut pull = u * (k * s.rest);
-                if w > 0.0 {
-                    let v = d + self.mu[i];
-                    let r = v.norm();
-                    let cap = MAX_STRETCH * s.rest;
-                    let z = if r > cap { v * (cap / r) } else { v };
-                    let mu = v - z;
-                    self.mu[i] = mu;
-                    pull += (z - mu) * w;
-                }
-                let tie = k + w;
-                if fb != NONE {
-                    let mut g = pull;
-                    if fa == NONE {
-                        g += self.x[a] * tie;
-                    }
-                    add_rhs(&mut self.rhs, n, fb as usize, &g);
-                }
-                if fa != NONE {
-                    let mut g = -pull;
-                    if fb == NONE {
-                        g += self.x[b] * tie;
-                    }
-                    add_rhs(&mut self.rhs, n, fa as usize, &g);
-                }
-            }
-            // Global step.
-            sys.chol
-                .solve_in_place(&mut self.rhs)
-                .map_err(method_error)?;
-            residual = 0.0;
-            for (f, &p) in topo.free_points.iter().enumerate() {
-                let new = Vec3::new(self.rhs[f], self.rhs[n + f], self.rhs[2 * n + f]);
-                residual = f64::max(residual, (new - self.x[p as usize]).norm());
-                self.x[p as usize] = new;
-            }
-            if residual.is_nan() || residual <= self.tolerance {
-                break;
-            }
-        }
-
-        commit(
-            mesh,
-            &self.contacts,
-            params,
-            state,
-            &topo.free_points,
-            &self.x,
-            &mut self.hash,
-        )?;
+        commit_in_step(mesh, colliders, state, free, &self.x, h)?;
         if params.stretch_limit {
-            self.watch(mesh, colliders, state, h, residual <= self.tolerance);
+            self.watch(mesh, colliders, state, h, outcome.converged);
         }
         Ok(StepReport {
             iterations,
-            residual,
+            residual: outcome.residual,
         })
+    }
+}
+
+/// Moves the free points to `x` with `last` at their start-of-step positions, so that `(x -
+/// last) / h` is the step's velocity, then puts back outside a collision object any point that
+/// its contact term left inside: onto the surface (a plane's at the course's offset), with
+/// `last` moved so that the point keeps its velocity but for the part into the object, which
+/// is removed. That correction takes kinetic energy out and moves a point by no more than
+/// the term let it in (micrometres); it gives no point a velocity it did not have.
+///
+/// # Errors
+/// [`SolveError::NonFinite`] for the first non-finite point.
+fn commit_in_step(
+    mesh: &ClothMesh,
+    colliders: &[Collider],
+    state: &mut ClothState,
+    free: &[u32],
+    x: &[Vec3],
+    h: f64,
+) -> Result<(), SolveError> {
+    for &p in free {
+        let p = p as usize;
+        let x0 = state.positions[p];
+        let mut new = x[p];
+        let mut velocity = (new - x0) / h;
+        let mut corrected = false;
+        for c in colliders {
+            let Some((dist, n)) = surface_distance(c, &x0, &new) else {
+                continue;
+            };
+            if dist >= 0.0 {
+                continue;
+            }
+            let lift = match c {
+                Collider::Sphere(_) => -dist,
+                Collider::Plane(_) => SURFACE_OFFSET - dist,
+            };
+            new += n * lift;
+            corrected = true;
+            let into = velocity.dot(&n);
+            if into < 0.0 {
+                velocity -= n * into;
+            }
+        }
+        state.positions[p] = new;
+        state.last[p] = if corrected { new - velocity * h } else { x0 };
+    }
+    match state.first_non_finite() {
+        Some(i) => Err(SolveError::non_finite(mesh, i)),
+        None => Ok(()),
     }
 }
 
@@ -780,44 +780,6 @@ fn fastest_point(mesh: &ClothMesh, state: &ClothState) -> f64 {
         .filter(|(_, pinned)| !**pinned)
         .map(|((x, l), _)| (x - l).norm())
         .fold(0.0, f64::max)
-}
-
-/// The incremental potential `Phi` of the step without the stretch limit, J, up to a common
-/// constant, at the start `x0` and at the prediction `y`: `(1 + c h)/(2 h^2) |x - y|_M^2 +
-/// E_springs(x) - sum_i m g . x_i` (pinned points are the same in both, so they count alike),
-/// in one pass over the springs.
-fn potentials(
-    mesh: &ClothMesh,
-    params: &StepParams,
-    inertia: &[f64],
-    weight: Vec3,
-    x0: &[Vec3],
-    y: &[Vec3],
-) -> (f64, f64) {
-    let (mut at_start, mut at_prediction) = (0.0, 0.0);
-    for (((a, b), &pinned), &inertia) in x0.iter().zip(y).zip(mesh.pinned()).zip(inertia) {
-        if !pinned {
-            at_start += 0.5 * inertia * (a - b).norm_squared() - weight.dot(a);
-            at_prediction -= weight.dot(b);
-        }
-    }
-    for s in mesh.springs() {
-        let k = params.stiffness(s.kind);
-        if k != 0.0 {
-            let (i, j) = (s.a as usize, s.b as usize);
-            let e = (x0[j] - x0[i]).norm() - s.rest;
-            let f = (y[j] - y[i]).norm() - s.rest;
-            at_start += 0.5 * k * e * e;
-            at_prediction += 0.5 * k * f * f;
-        }
-    }
-    (at_start, at_prediction)
-}
-
-fn add_rhs(rhs: &mut [f64], n: usize, f: usize, g: &Vec3) {
-    rhs[f] += g.x;
-    rhs[n + f] += g.y;
-    rhs[2 * n + f] += g.z;
 }
 
 #[cfg(test)]

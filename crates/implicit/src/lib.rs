@@ -64,8 +64,11 @@ mod contact;
 mod entries;
 mod fast_implicit;
 mod implicit_euler;
+mod lbfgs;
 mod memory;
+mod objective;
 mod retime;
+mod self_contact;
 mod spring_energy;
 mod topology;
 
