@@ -1,28 +1,38 @@
-//! Liu et al. 2013, "Fast Simulation of Mass-Spring Systems": backward Euler by local/global
-//! iterations with one constant, prefactored matrix.
+//! Backward Euler on one constant, prefactored matrix: the projective-dynamics matrix of Liu et
+//! al. 2013, "Fast Simulation of Mass-Spring Systems", as the initial Hessian of an L-BFGS
+//! minimisation with a line search (Liu, Bouaziz and Kavan 2017, "Quasi-Newton methods for
+//! real-time simulation of hyperelastic materials").
 //!
 //! # Method
 //!
-//! The step minimises the same incremental potential as [`ImplicitEuler`](crate::ImplicitEuler),
-//! `Phi(x) = (1 + c h)/(2 h^2) |x - y|_M^2 + E(x)`, `y = x0 + h v0 / (1 + c h)`, using the
-//! identity `k/2 (|d| - L)^2 = min_{|p| = L} k/2 |d - p|^2` for each spring vector `d`. Starting
-//! from whichever of the prediction `y` and the step's start `x0` has the lower `Phi` (the
-//! springs' part: the limit's term is zero at any allowed state), each iteration does
+//! The step minimises the incremental potential
 //!
 //! ```text
-//! local:   p_s = L_s d_s / |d_s|                        (per spring, closed form)
-//!          q_s = the stretch limit's target (below)
-//! global:  (M (1 + c h) / h^2 + sum_s (k_s + w_s) A_s^T A_s) x
-//!              = M (1 + c h) / h^2 y + M g + sum_s A_s^T (k_s p_s + w_s q_s)
+//! Phi(x) = sum_i m_i (1 + (c + c_f,i) h) / (2 h^2) |x_i - y_i|^2 - sum_i m g . x_i
+//!        + sum_s k_s/2 (|d_s| - L_s)^2 + (the stretch limit's term, below)
+//!        + (the contact terms, below)
 //! ```
 //!
-//! where `A_s x = x_b - x_a`. The matrix is the same for the three coordinates and does not
-//! depend on `x`: it is factored (faer sparse Cholesky, one scalar unknown per free point) only
-//! when `ks`, the density, the step, the drag, a spring toggle, the stretch limit's switch or the
-//! topology changes, and each iteration is two triangular solves with three right-hand sides.
-//! Pinned points are eliminated into the right-hand side. The iterations stop when a global
-//! step moves no point farther than the tolerance ([`FAST_TOLERANCE`] by default), or after the
-//! iteration count (the solver's `iterations` option, [`DEFAULT_ITERATIONS`] by default).
+//! with `y_i` the damped prediction, `d_s = x_b - x_a` a spring's vector and `c_f,i` the drag of
+//! the friction a point rests on (see [Collisions](#collisions)). The matrix
+//!
+//! ```text
+//! A = M (1 + c h) / h^2 + sum_s (k_s + w_s) A_s^T A_s          (A_s x = x_b - x_a)
+//! ```
+//!
+//! is the Hessian of Liu et al.'s local/global form of the springs' part, the same for the
+//! three coordinates and independent of `x`: it is factored (faer sparse Cholesky, one scalar
+//! unknown per free point) only when `ks`, the density, the step, the drag, a spring toggle, the
+//! stretch limit's switch or level, or the topology changes. Each iteration takes the L-BFGS
+//! direction (five curvature pairs, two-loop recursion, `A^-1` as the initial inverse Hessian:
+//! two triangular solves with three right-hand sides) and halves the step along it until `Phi`
+//! falls by the Armijo share of the slope. With no curvature pair the direction is `-A^-1 grad
+//! Phi`, which is exactly Liu et al.'s local/global iteration; the pairs correct it for what
+//! `A` does not describe (the springs' true curvature, the contact terms, the friction's drag).
+//! Pinned points are not unknowns. The iterations stop once a full step (not halved) moves no
+//! point farther than the tolerance ([`FAST_TOLERANCE`] by default) with the stretch limit met
+//! within 0.2 % of rest, or after the iteration count (the solver's `iterations` option,
+//! [`DEFAULT_ITERATIONS`] by default), whichever comes first.
 //!
 //! # The stretch limit
 //!
@@ -30,20 +40,19 @@
 //! (Provot's correction): it moves the ends of each over-long spring back to `1.1 L`, one
 //! spring after the other, so a later correction can stretch an earlier spring again, and a
 //! falling cloth keeps springs up to about 1.17 L. Here the limit is part of the minimisation
-//! instead: the constraint `|d_s| <= 1.1 L_s` on the step's positions, in the projective-dynamics
-//! form of a projection in the local step. Its term `w_s/2 |d_s - q_s|^2` pulls each spring
-//! vector towards its projection onto the allowed ball `|q| <= 1.1 L_s`, with a scaled
-//! multiplier `u_s` per spring, a vector (ADMM, Overby et al. 2017), that turns the penalty into
-//! the exact constraint as the iterations converge:
+//! instead: the constraint `|d_s| <= 1.1 L_s` on the step's positions, by the augmented term
+//! `w_s/2 dist(d_s + u_s, B_s)^2` in `Phi`, `B_s` the allowed ball `|q| <= 1.1 L_s`, with a
+//! scaled multiplier `u_s` per spring, a vector (ADMM, Overby et al. 2017), that turns the
+//! penalty into the exact constraint as the iterations converge. After every iteration:
 //!
 //! ```text
 //! v_s  = d_s + u_s
 //! z_s  = v_s min(1, 1.1 L_s / |v_s|)                      (projection onto the ball)
 //! u_s <- v_s - z_s                                        (the tension over w_s)
-//! q_s  = z_s - u_s
 //! ```
 //!
-//! A slack spring gets `u_s = 0` and `q_s = d_s`: its term adds nothing to the right-hand side.
+//! For fixed multipliers the term is convex and continuously differentiable in `d_s`, with the
+//! gradient `w_s (v_s - z_s)`. A slack spring gets `u_s = 0` and a zero term.
 //! A spring already beyond the limit (a state left by the course's sweep, a swap from Verlet,
 //! an edit of `ks`) is pulled towards its projection, weighted against the mass and the other
 //! springs in the same convex solve. `w_s` is [`limit_weight`]: the spring's own stiffness plus
@@ -90,32 +99,53 @@
 //!
 //! # Stability
 //!
-//! Every global step is a convex quadratic solve with a positive-definite matrix, stable for any
-//! step and stiffness. Without the limit each local step and each global step lowers `Phi` (Liu et
-//! al.'s block descent), so even a truncated step ends with `Phi` no higher than at its start.
-//! Starting from `y` alone would bound the result by the springs' energy at `y`, which stiff
-//! springs and a velocity field that stretches them (a collision's or self-collision's push) make
-//! far larger than the energy the cloth has; starting from the lower of `Phi(y)` and `Phi(x0)`
-//! bounds it by `Phi(x0)`, the start's own spring energy plus the kinetic energy the prediction
-//! carries, so a truncated step cannot create energy. With the limit on, the iteration is ADMM,
-//! which need not lower `Phi` at every iteration: for a convex energy and a convex constraint its
-//! standard form converges at any weight, but the springs' energy is not convex (a compressed
-//! spring), so this is an argument rather than a proof, and a run that diverges all the same is
-//! stopped by the front ends' divergence guard. With few iterations the solver under-resolves stiff
-//! springs, which makes the cloth look softer and more damped. At convergence the step equals
-//! [`ImplicitEuler`]'s up to the form of the limit (exact here, a stiff penalty, reached by
-//! multipliers, there). Both implicit solvers are meant to run at one step per frame.
+//! Every accepted iteration lowers `Phi` (the line search takes no step that does not), and the
+//! minimisation starts from whichever of the prediction `y` and the step's start `x0` has the
+//! lower `Phi`. So even a step cut off by the iteration count ends with `Phi` no higher than at
+//! `x0`: the start's potential energy (springs, gravity, contact terms) plus the kinetic energy
+//! the prediction carries, reduced by the drag. The step creates no energy whatever its size and
+//! stiffness; the matrix is positive definite, so every direction is a descent direction or the
+//! iterations restart from `-A^-1 grad Phi`, which is. The one exception is the stretch limit's
+//! multiplier update, which changes the limit's term between iterations (ADMM): for a convex
+//! energy and a convex constraint its standard form converges at any weight, but the springs'
+//! energy is not convex (a compressed spring), so this is an argument rather than a proof, and a
+//! run that diverges all the same is stopped by the front ends' divergence guard. With few
+//! iterations the solver under-resolves stiff springs, which makes the cloth look softer and
+//! more damped. At convergence the step equals [`ImplicitEuler`]'s up to the form of the limit
+//! and of the contacts.
 //!
 //! # Collisions
 //!
-//! The friction of a collision object is a drag on the points resting on it, inside the step:
-//! such a point's mass term is `m (1 + (c + c_f) h) / h^2`, with its own prediction, so the
-//! matrix's diagonal holds it and is refactored when the set of resting points changes (a
-//! cloth at rest on an object keeps the same set). After the solve, self-collision is applied
-//! as Verlet applies it, and the collision objects push points out of them: the resting points
-//! without friction, a point that reaches an object during the step with one step's drag. The
-//! crate's documentation ([Friction](crate#friction)) gives the drag rate `c_f` that stands for
-//! the course's per-step friction, and why the course's friction after a large step cannot.
+//! Contact is part of the minimised potential, as one-sided penalties on the contacts found at
+//! the step's start (in the manner of Vertex Block Descent, Chen et al. 2024), not a push after
+//! the solve:
+//!
+//! - a collision object adds `k_i/2 min(0, s_i(x_i) - delta)^2` for each free point, `s_i` its
+//!   signed distance to the surface on the side the point starts the step on (so a plane's side
+//!   is fixed for the step), `delta` the course's surface offset (0.1 mm) and `k_i` the point's
+//!   own diagonal of `A` (as stiff as everything else that holds it, so a point pressed with a
+//!   newton sinks 10 um into the 0.1 mm margin at the course's ks);
+//! - self-collision adds `k/2 min(0, |x_j - x_i| - 2 t)^2` for each pair of points closer than
+//!   twice the thickness `t` at the step's start or at their predictions, with `k = ks + m (1
+//!   + c h) / h^2`: both points are pushed apart, with equal and opposite forces.
+//!
+//! Each term is a potential that depends on the positions alone and is zero away from contact,
+//! so it is conservative: the minimisation lowers `Phi` with it as with the springs, and what it
+//! stores while a point presses on an object it gives back as the point leaves, never more. A
+//! position push after a frame-long step (the course's collision response, applied after the
+//! solve) would move points by up to the overlap without moving their previous positions: a
+//! velocity of overlap over step, made from nothing. After the solve, a point that the penalty still left inside an object (only under a
+//! force of many newtons) is put onto its surface with its velocity into the object removed and
+//! its previous position moved with it: that only takes kinetic energy out.
+//!
+//! The friction of a collision object is a drag on the points in contact with it, inside the
+//! step: such a point's mass term in `Phi` is `m (1 + (c + c_f) h) / h^2`, with its own
+//! prediction. A point is in contact for the step when its prediction ends within
+//! [`CONTACT_DISTANCE`](crate::CONTACT_DISTANCE) of (or inside) the object, whether it rests
+//! on it or arrives during the step, as the course applies its friction to the whole
+//! displacement of the step in which a point crosses a surface. The crate's documentation
+//! ([Friction](crate#friction)) gives the drag rate `c_f` that stands for the course's per-step
+//! friction, and why the course's friction after a large step cannot.
 //!
 //! # Damping
 //!
@@ -140,7 +170,7 @@ use crate::objective::{Objective, StepProblem, surface_distance};
 use crate::self_contact::SelfContacts;
 use crate::topology::{NONE, Topology};
 
-/// By default the local/global iterations of a step stop once a global step moves no point
+/// By default the iterations of a step stop once a full iteration moves no point
 /// farther than this, metres (0.1 um: a two-hundredth of the 0.1 % stretch of a 2 cm spring).
 pub const FAST_TOLERANCE: f64 = 1e-7;
 
@@ -191,8 +221,8 @@ fn penalty_scale(level: u32) -> f64 {
     PENALTY_GROWTH.powi(level as i32)
 }
 
-/// Local/global iterations per step of [`FastImplicit::new`], at most.
-pub const DEFAULT_ITERATIONS: u32 = 20;
+/// Iterations per step of [`FastImplicit::new`], at most.
+pub const DEFAULT_ITERATIONS: u32 = 10;
 
 /// The weight of the stretch limit's projection term of a spring of stiffness `k`, N/m, for a
 /// step whose mass term per point is `inertia = m (1 + c h) / h^2`: `k + inertia`.
@@ -206,12 +236,12 @@ pub fn limit_weight(k: f64, inertia: f64) -> f64 {
     k + inertia
 }
 
-/// The fast local/global implicit solver. Owns caches (topology, factored matrix, multiplier
+/// The fast implicit solver. Owns caches (topology, factored matrix, multiplier
 /// warm start) and scratch memory only.
 #[derive(Debug)]
 pub struct FastImplicit {
     system: Option<System>,
-    /// Local/global iterations per step, at most (at least 1).
+    /// Iterations per step, at most (at least 1).
     iterations: u32,
     tolerance: f64,
     /// Scaled multipliers of the stretch limit, m, one vector per spring (warm start).
@@ -274,8 +304,6 @@ struct System {
     col_ptr: Vec<usize>,
     values: Vec<f64>,
     key: Option<MatrixKey>,
-    /// The free points' mass terms the factor was computed with.
-    inertia: Vec<f64>,
     /// The matrix's diagonal, per free point, N/m: the stiffness of a point's contact term.
     diag: Vec<f64>,
 }
@@ -294,7 +322,7 @@ impl FastImplicit {
         Self::with_iterations(DEFAULT_ITERATIONS)
     }
 
-    /// A new solver doing at most `iterations` local/global iterations per step (0 counts as
+    /// A new solver doing at most `iterations` iterations per step (0 counts as
     /// 1), stopping earlier on the tolerance.
     #[must_use]
     pub fn with_iterations(iterations: u32) -> Self {
@@ -324,7 +352,7 @@ impl FastImplicit {
         }
     }
 
-    /// Local/global iterations per step, at most.
+    /// Iterations per step, at most.
     #[must_use]
     pub fn iterations(&self) -> u32 {
         self.iterations
@@ -361,8 +389,14 @@ impl FastImplicit {
         let pattern = 8 * 2 * col_ptr.len() as u64 + 8 * row_idx.len() as u64;
         let values = 8 * row_idx.len() as u64;
         // rhs (3 per free point), y, x and the quiet window's checkpoint (3 per point each),
-        // the multipliers (3 per spring).
-        let scratch = 8 * (3 * n + 9 * mesh.len() as u64 + 3 * mesh.springs().len() as u64);
+        // the multipliers (3 per spring); the L-BFGS curvature pairs and vectors (3 per free
+        // point each) and a trial configuration (3 per point); the self-collision cells (2
+        // per point) and pairs (about 4 per point in a folded cloth).
+        let lbfgs = 3 * n * (2 * Lbfgs::HISTORY as u64 + 3) + 3 * mesh.len() as u64;
+        let points = mesh.len() as u64;
+        let scratch = 8 * (3 * n + 9 * points + 3 * mesh.springs().len() as u64 + lbfgs)
+            + 16 * points
+            + 8 * 4 * points;
         topo.bytes() + pattern + values + factor.bytes() + scratch
     }
 
@@ -476,9 +510,9 @@ impl FastImplicit {
     }
 
     /// Makes sure the topology, the symbolic factor and the numeric factor describe `mesh` and
-    /// the current parameters.
-    /// `inertia` is the mass term of a point that rests on nothing, which the limit's weight
-    /// is set by; each point's own is in `point_inertia`.
+    /// the current parameters. `inertia` is the mass term of a point that rests on nothing,
+    /// which the matrix holds for every point: the friction's drag on the points resting on an
+    /// object is in the minimised potential only, so the matrix does not change with them.
     fn prepare(
         &mut self,
         mesh: &ClothMesh,
@@ -499,7 +533,6 @@ impl FastImplicit {
                 col_ptr,
                 values,
                 key: None,
-                inertia: Vec::new(),
                 diag: Vec::new(),
             });
         }
@@ -521,27 +554,14 @@ impl FastImplicit {
             level: self.level,
         };
         let topo = &sys.topo;
-        let point_inertia = &self.point_inertia;
-        // NOTE: compared by value: the points resting on a collision object change the
-        // diagonal, and a cloth at rest keeps the same ones from step to step.
-        if sys.key == Some(key)
-            && sys.inertia.len() == topo.free()
-            && topo
-                .free_points
-                .iter()
-                .zip(&sys.inertia)
-                .all(|(&p, &m)| point_inertia[p as usize].to_bits() == m.to_bits())
-        {
+        if sys.key == Some(key) {
             return Ok(());
         }
         sys.key = None;
-        sys.inertia.clear();
-        sys.inertia
-            .extend(topo.free_points.iter().map(|&p| point_inertia[p as usize]));
         let v = &mut sys.values;
         v.fill(0.0);
-        for (f, &m) in sys.inertia.iter().enumerate() {
-            v[sys.col_ptr[f]] = m;
+        for f in 0..topo.free() {
+            v[sys.col_ptr[f]] = inertia;
         }
         for (s, &slot) in mesh.springs().iter().zip(&topo.spring_slot) {
             let k = spring_weight(params, s.kind, inertia, self.level);
@@ -560,7 +580,8 @@ impl FastImplicit {
         }
         sys.chol.factorize(&sys.values, 0.0).map_err(method_error)?;
         sys.diag.clear();
-        sys.diag.extend(sys.col_ptr[..topo.free()].iter().map(|&c| sys.values[c]));
+        sys.diag
+            .extend(sys.col_ptr[..topo.free()].iter().map(|&c| sys.values[c]));
         sys.key = Some(key);
         Ok(())
     }
@@ -663,8 +684,24 @@ impl Solver for FastImplicit {
         let pair_stiffness = params.stiffness(SpringKind::Structural) + inertia;
         let reach = 2.0 * mesh.spec().thickness;
         if params.self_collision {
-            self.self_contacts
-                .find(mesh, &[&state.positions, &self.y], reach);
+            // NOTE: pairs closer than the reach at the predictions are closer than the reach
+            // plus twice the largest prediction's move at the start: while that move is small
+            // (a cloth at or near rest) one search at the start with the reach so widened
+            // finds them, at half the cost of a search in each configuration.
+            let moved = state
+                .positions
+                .iter()
+                .zip(&self.y)
+                .map(|(a, b)| (a - b).norm_squared())
+                .fold(0.0, f64::max)
+                .sqrt();
+            if moved < 0.25 * reach {
+                self.self_contacts
+                    .find(mesh, &[&state.positions], reach + 2.0 * moved);
+            } else {
+                self.self_contacts
+                    .find(mesh, &[&state.positions, &self.y], reach);
+            }
         } else {
             self.self_contacts.clear();
         }
@@ -705,7 +742,13 @@ impl Solver for FastImplicit {
         }
         let outcome = self
             .lbfgs
-            .minimise(&mut self.x, free, max_iterations, self.tolerance, &mut problem)
+            .minimise(
+                &mut self.x,
+                free,
+                max_iterations,
+                self.tolerance,
+                &mut problem,
+            )
             .map_err(method_error)?;
         let iterations = outcome.iterations;
 

@@ -7,9 +7,6 @@ use std::collections::VecDeque;
 
 use cloth_mesh::Vec3;
 
-/// Curvature pairs kept (Liu et al. use 5 for cloth).
-const HISTORY: usize = 5;
-
 /// The Armijo constant: a step must lower the objective by at least this share of what its
 /// slope promises.
 const ARMIJO: f64 = 1e-4;
@@ -29,22 +26,18 @@ pub(crate) trait Problem {
     /// A message when the solve fails.
     fn precondition(&mut self, q: &mut [Vec3]) -> Result<(), String>;
 
-    /// Called after each accepted iteration, at its result `x`: may change the objective (a
-    /// multiplier update), and says whether it did and whether the constraints it holds are
-    /// met well enough to stop.
-    fn update(&mut self, _x: &[Vec3]) -> Update {
-        Update {
-            changed: false,
-            satisfied: true,
-        }
+    /// Called after each accepted iteration, at its result `x` with the objective's `value`
+    /// and gradient `grad` there: may change the objective (a multiplier update), bringing
+    /// `value` and `grad` up to date, and says whether the constraints it holds are met well
+    /// enough to stop.
+    fn update(&mut self, _x: &[Vec3], _value: &mut f64, _grad: &mut [Vec3]) -> Update {
+        Update { satisfied: true }
     }
 }
 
-/// What [`Problem::update`] did.
+/// What [`Problem::update`] found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Update {
-    /// The objective changed.
-    pub(crate) changed: bool,
     /// The constraints are met within their tolerance.
     pub(crate) satisfied: bool,
 }
@@ -85,6 +78,9 @@ fn dot(a: &[Vec3], b: &[Vec3]) -> f64 {
 }
 
 impl Lbfgs {
+    /// Curvature pairs kept (Liu et al. use 5).
+    pub(crate) const HISTORY: usize = 5;
+
     /// Minimises `objective` over the free points `free` of `x` (whose other points stay),
     /// from `x`, in at most `max_iterations` iterations: each a quasi-Newton direction whose
     /// initial inverse Hessian is `solve` (which overwrites its argument with the constant
@@ -93,7 +89,9 @@ impl Lbfgs {
     /// point farther than `tolerance`, or once no step along a descent direction lowers the
     /// objective in floating point.
     ///
-    /// Every accepted step lowers the objective, so it ends no higher than it started.
+    /// Every accepted step lowers the objective, so it ends no higher than it started, but for
+    /// the last, whose step moves no point farther than the tolerance and whose change is below
+    /// the objective's rounding.
     ///
     /// After each iteration the problem may change its objective ([`Problem::update`]); the
     /// iterations then go on from the same point on the new objective, keeping the curvature
@@ -129,6 +127,7 @@ impl Lbfgs {
             outcome.converged = true;
             return Ok(outcome);
         }
+        let mut satisfied = true;
         while outcome.iterations < max_iterations {
             outcome.iterations += 1;
             self.two_loop(problem)?;
@@ -146,11 +145,13 @@ impl Lbfgs {
                     break;
                 }
             }
-            let full = self
-                .direction
-                .iter()
-                .map(|d| d.norm())
-                .fold(0.0, f64::max);
+            let full = self.direction.iter().map(|d| d.norm()).fold(0.0, f64::max);
+            // NOTE: a full step that moves no point farther than the tolerance is the last one
+            // (if the constraints are met), and is taken whole: along a descent direction, so
+            // it lowers the objective in exact arithmetic, by less than the objective's
+            // rounding, which the line search's test could not see. Refusing it would leave a
+            // cloth that is almost at rest stuck short of its equilibrium.
+            let last = full <= tolerance;
             let mut step = 1.0;
             let mut accepted = None;
             for _ in 0..=MAX_HALVINGS {
@@ -158,7 +159,7 @@ impl Lbfgs {
                     self.trial[p as usize] = x[p as usize] + d * step;
                 }
                 let v = problem.evaluate(&self.trial, Some(&mut self.trial_grad));
-                if v <= value + ARMIJO * step * slope {
+                if last || v <= value + ARMIJO * step * slope {
                     accepted = Some(v);
                     break;
                 }
@@ -168,7 +169,7 @@ impl Lbfgs {
                 // No step lowers the objective in floating point: this is its minimum as far
                 // as rounding lets it be found.
                 outcome.residual = 0.0;
-                outcome.converged = true;
+                outcome.converged = satisfied;
                 break;
             };
             // The curvature pair of this step.
@@ -190,7 +191,7 @@ impl Lbfgs {
             value = v;
             if curvature > 0.0 {
                 pair.rho = 1.0 / curvature;
-                if self.pairs.len() == HISTORY {
+                if self.pairs.len() == Self::HISTORY {
                     self.spare.extend(self.pairs.pop_front());
                 }
                 self.pairs.push_back(pair);
@@ -198,14 +199,9 @@ impl Lbfgs {
                 self.spare.push(pair);
             }
             outcome.residual = full * step;
-            let update = problem.update(x);
-            if update.changed {
-                value = problem.evaluate(x, Some(&mut self.grad));
-            }
-            if std::env::var_os("LBFGS_DEBUG").is_some() {
-                eprintln!("it {} value {v:.15e} step {step} full {full:.3e} slope {slope:.3e} pairs {}", outcome.iterations, self.pairs.len());
-            }
-            if step == 1.0 && full <= tolerance && update.satisfied {
+            let update = problem.update(x, &mut value, &mut self.grad);
+            satisfied = update.satisfied;
+            if last && satisfied {
                 outcome.converged = true;
                 break;
             }
@@ -283,9 +279,7 @@ mod tests {
         let mut values = vec![f.evaluate(&x, None)];
         let mut solver = Lbfgs::default();
         for _ in 0..200 {
-            let out = solver
-                .minimise(&mut x, &free, 1, 1e-12, &mut f)
-                .unwrap();
+            let out = solver.minimise(&mut x, &free, 1, 1e-12, &mut f).unwrap();
             values.push(f.evaluate(&x, None));
             if out.converged {
                 break;
@@ -294,9 +288,7 @@ mod tests {
         // Monotone, iteration by iteration (each call is one iteration from a fresh history).
         assert!(values.windows(2).all(|w| w[1] <= w[0]), "{values:?}");
         let mut x = vec![Vec3::new(3.0, -2.0, 1.0); 6];
-        let out = solver
-            .minimise(&mut x, &free, 200, 1e-12, &mut f)
-            .unwrap();
+        let out = solver.minimise(&mut x, &free, 200, 1e-12, &mut f).unwrap();
         assert!(out.converged, "{out:?}");
         // The minimiser is c; the last step below 1e-12 m puts x within a few of that.
         for (p, q) in x.iter().zip(&c) {

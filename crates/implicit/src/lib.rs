@@ -5,10 +5,12 @@
 //! - [`ImplicitEuler`] (`implicit`): backward Euler, each step minimising the incremental
 //!   potential by Newton's method with a line search. Unconditionally stable, accurate to first
 //!   order in the step; for stiff cloths and one step per frame.
-//! - [`FastImplicit`] (`fast-implicit`): Liu et al. 2013, "Fast Simulation of Mass-Spring
-//!   Systems": the same backward-Euler step, approximated by local/global iterations with one
-//!   constant, prefactored matrix, stopped on a tolerance or an iteration count. The cheapest
-//!   stable option for large, stiff cloths.
+//! - [`FastImplicit`] (`fast-implicit`): the same backward-Euler step, minimised by L-BFGS with
+//!   a line search over one constant, prefactored matrix (Liu et al. 2013's projective-dynamics
+//!   matrix, as Liu, Bouaziz and Kavan 2017 use it), with contact and self-collision as
+//!   penalties inside the minimisation; every iteration lowers the step's potential, and it
+//!   stops on a tolerance or an iteration count. The cheapest stable option for large, stiff
+//!   cloths.
 //!
 //! Each is offered by name through its registry entry ([`ImplicitEuler::ENTRY`],
 //! [`FastImplicit::ENTRY`]), with its own options (`tolerance`, `iterations`).
@@ -53,10 +55,12 @@
 //! directions of a resting point, as the course's friction scales a point's whole
 //! displacement; the collision then removes the part that went into the object.
 //!
-//! After the solve the collision objects push points out of them as the course's collisions
-//! do: a resting point, whose friction the step has had, without friction; a point that
-//! reaches an object during the step with one step's drag on its displacement, `1 / (1 + c_f
-//! h)`, as the course applies its friction to the step in which a point crosses.
+//! Newton then lets the collision objects push points out of them after the solve, as the
+//! course's collisions do: a resting point, whose friction the step has had, without friction;
+//! a point that reaches an object during the step with one step's drag on its displacement, `1
+//! / (1 + c_f h)`, as the course applies its friction to the step in which a point crosses.
+//! The fast solver puts the objects and self-collision into the minimisation instead, and the
+//! drag on every point whose prediction reaches an object (its module doc says how and why).
 
 mod cholesky;
 mod commit;

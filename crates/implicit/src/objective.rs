@@ -126,14 +126,9 @@ impl Objective<'_> {
             }
             if w > 0.0 {
                 // `w/2 dist(d + mu, ball)^2`: the limit's augmented term for fixed multipliers.
-                let v = d + self.mu[i];
-                let r = v.norm();
-                let cap = MAX_STRETCH * s.rest;
-                if r > cap {
-                    let out = v * (1.0 - cap / r);
-                    total += 0.5 * w * out.norm_squared();
-                    force += out * w;
-                }
+                let out = beyond(d + self.mu[i], MAX_STRETCH * s.rest);
+                total += 0.5 * w * out.norm_squared();
+                force += out * w;
             }
             if let Some(g) = grad.as_deref_mut() {
                 if fb != NONE {
@@ -146,7 +141,7 @@ impl Objective<'_> {
         }
         for (f, &p) in topo.free_points.iter().enumerate() {
             let p = p as usize;
-            let k = self.contact_stiffness[f];
+            let k = 0.5 * self.contact_stiffness[f];
             for c in self.colliders {
                 if let Some((dist, n)) = surface_distance(c, &self.x0[p], &x[p]) {
                     let s = dist - CONTACT_GAP;
@@ -184,6 +179,16 @@ impl Objective<'_> {
     }
 }
 
+/// `v - proj(v)`, `proj` onto the ball `|q| <= cap`.
+fn beyond(v: Vec3, cap: f64) -> Vec3 {
+    let r = v.norm();
+    if r > cap {
+        v * (1.0 - cap / r)
+    } else {
+        Vec3::zeros()
+    }
+}
+
 /// A step's minimisation: its [`Objective`], the factored matrix that preconditions it and the
 /// stretch limit's multiplier update.
 pub(crate) struct StepProblem<'a> {
@@ -214,37 +219,48 @@ impl Problem for StepProblem<'_> {
     }
 
     /// The scaled multipliers' ADMM update (`u <- d + u - proj(d + u)`, the ball `|q| <= 1.1
-    /// L`), after every iteration as in the local/global iteration.
-    fn update(&mut self, x: &[Vec3]) -> Update {
+    /// L`), after every iteration as in the local/global iteration; only the limit's terms
+    /// change, so only they are taken out of `value` and `grad` and put back.
+    fn update(&mut self, x: &[Vec3], value: &mut f64, grad: &mut [Vec3]) -> Update {
         let o = &mut self.objective;
         if o.limits.iter().all(|&w| w == 0.0) {
-            return Update {
-                changed: false,
-                satisfied: true,
-            };
+            return Update { satisfied: true };
         }
         let mut worst: f64 = 0.0;
-        let mut changed = false;
+        let topo = o.topo;
         for (s, mu) in o.mesh.springs().iter().zip(o.mu.iter_mut()) {
             let (a, b) = (s.a as usize, s.b as usize);
-            if o.topo.free_index[a] == NONE && o.topo.free_index[b] == NONE {
+            let (fa, fb) = (topo.free_index[a], topo.free_index[b]);
+            let w = o.limits[kind_index(s.kind)];
+            if (fa == NONE && fb == NONE) || w == 0.0 {
                 continue;
             }
-            let d = x[b] - x[a];
-            let v = d + *mu;
-            let r = v.norm();
             let cap = MAX_STRETCH * s.rest;
-            let new = if r > cap {
-                v * (1.0 - cap / r)
-            } else {
-                Vec3::zeros()
-            };
-            changed |= new != *mu;
-            *mu = new;
-            worst = worst.max((d.norm() - cap) / s.rest);
+            let d = x[b] - x[a];
+            let d2 = d.norm_squared();
+            if *mu == Vec3::zeros() && d2 <= cap * cap {
+                // Slack with no tension: the term is zero before and after.
+                continue;
+            }
+            worst = worst.max((d2.sqrt() - cap) / s.rest);
+            // `old` is the term's `v - proj(v)` before the update, which is also the new
+            // multiplier; `out` is the term's after it.
+            let old = beyond(d + *mu, cap);
+            let out = beyond(d + old, cap);
+            *mu = old;
+            if old == Vec3::zeros() && out == Vec3::zeros() {
+                continue;
+            }
+            *value += 0.5 * w * (out.norm_squared() - old.norm_squared());
+            let change = (out - old) * w;
+            if fb != NONE {
+                grad[fb as usize] += change;
+            }
+            if fa != NONE {
+                grad[fa as usize] -= change;
+            }
         }
         Update {
-            changed,
             satisfied: worst <= LIMIT_OVERSHOOT_TOLERANCE,
         }
     }

@@ -2,8 +2,9 @@
 
 use cloth_mesh::{ClothMesh, Vec3};
 
-/// Pairs of points closer than a distance `D`, from a uniform grid of cells of side `D`: each
-/// point looks into its own cell and the 26 around it.
+/// Pairs of points closer than a distance `D`, from a uniform grid of cells of side `2 D`: a
+/// point's partners within `D` lie, along each axis, in its own cell or the neighbour on the
+/// side of the cell's middle it is on, so it looks into those eight.
 ///
 /// Cells are keyed by a hash of their integer coordinates and the points sorted by key, so a
 /// search allocates nothing once the arrays have grown. Two cells that share a key only add
@@ -33,6 +34,14 @@ fn cell_of(p: &Vec3, size: f64) -> [i64; 3] {
     ]
 }
 
+/// Per axis, the neighbouring cell on the side of its cell that `p` is nearer to (-1 or +1).
+fn near_side(p: &Vec3, size: f64) -> [i64; 3] {
+    [p.x, p.y, p.z].map(|v| {
+        let scaled = v / size;
+        if scaled - scaled.floor() < 0.5 { -1 } else { 1 }
+    })
+}
+
 impl SelfContacts {
     /// Finds the pairs of points of `mesh`, not both pinned, closer than `reach` in any of
     /// `configurations` (each a position per point), replacing the last search's.
@@ -43,20 +52,22 @@ impl SelfContacts {
         }
         let pinned = mesh.pinned();
         let reach2 = reach * reach;
+        let size = 2.0 * reach;
         for positions in configurations {
             self.cells.clear();
             self.cells.extend(
                 positions
                     .iter()
                     .enumerate()
-                    .map(|(i, p)| (cell_key(cell_of(p, reach)), i as u32)),
+                    .map(|(i, p)| (cell_key(cell_of(p, size)), i as u32)),
             );
             self.cells.sort_unstable();
             for (i, p) in positions.iter().enumerate() {
-                let c = cell_of(p, reach);
-                for dx in -1..=1 {
-                    for dy in -1..=1 {
-                        for dz in -1..=1 {
+                let c = cell_of(p, size);
+                let side = near_side(p, size);
+                for dx in [0, side[0]] {
+                    for dy in [0, side[1]] {
+                        for dz in [0, side[2]] {
                             let key = cell_key([c[0] + dx, c[1] + dy, c[2] + dz]);
                             let from = self.cells.partition_point(|&(k, _)| k < key);
                             for &(k, j) in &self.cells[from..] {
