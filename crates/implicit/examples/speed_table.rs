@@ -17,6 +17,7 @@
 //! The bounds the figures are read against: fast-implicit at most 1.5 x and implicit at most
 //! 4 x Verlet at the scene's `ks`, both at most 0.25 x Verlet at 200 steps per frame at ks 1e6.
 
+use std::fmt::Write as _;
 use std::time::Instant;
 
 use cloth_implicit::{FastImplicit, ImplicitEuler};
@@ -54,8 +55,11 @@ fn pinned4(n: usize) -> Result<ClothMesh, String> {
     ClothMesh::new(&spec).map_err(|e| format!("pinned4 at {n} x {n}: {e}"))
 }
 
+/// A solver's name, constructor and steps per frame.
+type Entry = (&'static str, fn() -> Box<dyn Solver>, u32);
+
 fn times(case: &Case, frames: usize, only: &[String]) -> Vec<Run> {
-    let solvers: [(&'static str, fn() -> Box<dyn Solver>, u32); 3] = [
+    let solvers: [Entry; 3] = [
         ("verlet", || Box::new(Verlet::new()), case.verlet_steps),
         ("fast-implicit", || Box::new(FastImplicit::new()), 1),
         ("implicit", || Box::new(ImplicitEuler::new()), 1),
@@ -140,7 +144,7 @@ fn main() {
         for (ks, verlet_steps) in [(params.ks, 30), (1e6, 200)] {
             cases.push(Case {
                 label: format!("{} ks {ks:.0e}", b.name),
-                mesh: scene.mesh.clone(),
+                mesh: (*scene.mesh).clone(),
                 colliders: scene.colliders.clone(),
                 params: StepParams { ks, ..params },
                 verlet_steps,
@@ -187,10 +191,10 @@ fn main() {
                     None => format!("{:.2} s {:.2} x", r.seconds, r.seconds / reference),
                 },
             };
-            row.push_str(&format!(" {cell:>22}"));
+            let _ = write!(row, " {cell:>22}");
         }
         if let Some(e) = &runs[0].failed {
-            row.push_str(&format!("  (verlet failed: {e})"));
+            let _ = write!(row, "  (verlet failed: {e})");
         }
         println!("{row}");
     }

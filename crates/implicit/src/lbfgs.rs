@@ -145,7 +145,7 @@ impl Lbfgs {
                     break;
                 }
             }
-            let full = self.direction.iter().map(|d| d.norm()).fold(0.0, f64::max);
+            let full = self.direction.iter().map(Vec3::norm).fold(0.0, f64::max);
             // NOTE: a full step that moves no point farther than the tolerance is the last one
             // (if the constraints are met), and is taken whole: along a descent direction, so
             // it lowers the objective in exact arithmetic, by less than the objective's
@@ -240,6 +240,30 @@ impl Lbfgs {
 mod tests {
     use super::*;
 
+    /// A quartic well per point: `a_i / 2 |x_i - c_i|^2 + |x_i - c_i|^4 / 4`.
+    struct Quartic {
+        c: Vec<Vec3>,
+        a: Vec<f64>,
+    }
+    impl Problem for Quartic {
+        fn evaluate(&self, x: &[Vec3], g: Option<&mut [Vec3]>) -> f64 {
+            let mut v = 0.0;
+            let mut grad = vec![Vec3::zeros(); x.len()];
+            for i in 0..x.len() {
+                let d = x[i] - self.c[i];
+                v += 0.5 * self.a[i] * d.norm_squared() + 0.25 * d.norm_squared().powi(2);
+                grad[i] = d * (self.a[i] + d.norm_squared());
+            }
+            if let Some(g) = g {
+                g.copy_from_slice(&grad);
+            }
+            v
+        }
+        fn precondition(&mut self, _q: &mut [Vec3]) -> Result<(), String> {
+            Ok(())
+        }
+    }
+
     #[test]
     fn minimises_a_quadratic_with_a_poor_initial_hessian_and_only_ever_descends() {
         // f(x) = sum_i a_i / 2 |x_i - c_i|^2 + a quartic coupling; H0 = identity, which is off
@@ -248,28 +272,6 @@ mod tests {
             .map(|i| Vec3::new(f64::from(i), 1.0 - f64::from(i), 0.5))
             .collect();
         let a: Vec<f64> = (0..6).map(|i| 1.0 + 7.8 * f64::from(i)).collect();
-        struct Quartic {
-            c: Vec<Vec3>,
-            a: Vec<f64>,
-        }
-        impl Problem for Quartic {
-            fn evaluate(&self, x: &[Vec3], g: Option<&mut [Vec3]>) -> f64 {
-                let mut v = 0.0;
-                let mut grad = vec![Vec3::zeros(); x.len()];
-                for i in 0..x.len() {
-                    let d = x[i] - self.c[i];
-                    v += 0.5 * self.a[i] * d.norm_squared() + 0.25 * d.norm_squared().powi(2);
-                    grad[i] = d * (self.a[i] + d.norm_squared());
-                }
-                if let Some(g) = g {
-                    g.copy_from_slice(&grad);
-                }
-                v
-            }
-            fn precondition(&mut self, _q: &mut [Vec3]) -> Result<(), String> {
-                Ok(())
-            }
-        }
         let mut f = Quartic {
             c: c.clone(),
             a: a.clone(),
