@@ -23,12 +23,13 @@
 //! is the Hessian of Liu et al.'s local/global form of the springs' part, the same for the
 //! three coordinates and independent of `x`: it is factored (faer sparse Cholesky, one scalar
 //! unknown per free point) only when `ks`, the density, the step, the drag, a spring toggle, the
-//! stretch limit's switch or level, or the topology changes. Each iteration takes the L-BFGS
+//! stretch limit's switch or level, the set of points in contact with a collision object (whose
+//! friction's drag is on the diagonal, see [Collisions](#collisions)) or the topology changes. Each iteration takes the L-BFGS
 //! direction (five curvature pairs, two-loop recursion, `A^-1` as the initial inverse Hessian:
 //! two triangular solves with three right-hand sides) and halves the step along it until `Phi`
 //! falls by the Armijo share of the slope. With no curvature pair the direction is `-A^-1 grad
 //! Phi`, which is exactly Liu et al.'s local/global iteration; the pairs correct it for what
-//! `A` does not describe (the springs' true curvature, the contact terms, the friction's drag).
+//! `A` does not describe (the springs' true curvature, the contact terms).
 //! Pinned points are not unknowns. The iterations stop once a full step (not halved) moves no
 //! point farther than the tolerance ([`FAST_TOLERANCE`] by default) with the stretch limit met
 //! within 0.2 % of rest, or after the iteration count (the solver's `iterations` option,
@@ -122,9 +123,11 @@
 //!
 //! - a collision object adds `k_i/2 min(0, s_i(x_i) - delta)^2` for each free point, `s_i` its
 //!   signed distance to the surface on the side the point starts the step on (so a plane's side
-//!   is fixed for the step), `delta` the course's surface offset (0.1 mm) and `k_i` the point's
-//!   own diagonal of `A` (as stiff as everything else that holds it, so a point pressed with a
-//!   newton sinks 10 um into the 0.1 mm margin at the course's ks);
+//!   is fixed for the step), `delta` the course's surface offset (0.1 mm) and `k_i` half the
+//!   point's own diagonal of `A` (about as stiff as everything else that holds it, yet not so
+//!   much stiffer than `A` that the L-BFGS steps overshoot it), and at least the stiffness at
+//!   which the point's own weight sinks it a tenth of `delta` (a point of the course's cloth
+//!   pressed with a newton sinks about 20 um into the 0.1 mm margin);
 //! - self-collision adds `k/2 min(0, |x_j - x_i| - 2 t)^2` for each pair of points closer than
 //!   twice the thickness `t` at the step's start or at their predictions, with `k = ks + m (1
 //!   + c h) / h^2`: both points are pushed apart, with equal and opposite forces.
@@ -166,13 +169,17 @@ use crate::commit::{hold_still, predict};
 use crate::contact::{Contacts, touches};
 use crate::lbfgs::{Lbfgs, Problem};
 use crate::memory::{Allocation, try_filled};
-use crate::objective::{Objective, StepProblem, surface_distance};
+use crate::objective::{CONTACT_GAP, Objective, StepProblem, surface_distance};
 use crate::self_contact::SelfContacts;
 use crate::topology::{NONE, Topology};
 
 /// By default the iterations of a step stop once a full iteration moves no point
 /// farther than this, metres (0.1 um: a two-hundredth of the 0.1 % stretch of a 2 cm spring).
 pub const FAST_TOLERANCE: f64 = 1e-7;
+
+/// A point's contact term is stiff enough that the point's own weight sinks it at most this
+/// share of the contact margin into it.
+const CONTACT_SINK: f64 = 0.1;
 
 /// The factor between successive levels of the stretch limit's penalty.
 const PENALTY_GROWTH: f64 = 10.0;
@@ -304,6 +311,8 @@ struct System {
     col_ptr: Vec<usize>,
     values: Vec<f64>,
     key: Option<MatrixKey>,
+    /// The free points' mass terms the factor was computed with.
+    inertia: Vec<f64>,
     /// The matrix's diagonal, per free point, N/m: the stiffness of a point's contact term.
     diag: Vec<f64>,
 }
@@ -511,8 +520,9 @@ impl FastImplicit {
 
     /// Makes sure the topology, the symbolic factor and the numeric factor describe `mesh` and
     /// the current parameters. `inertia` is the mass term of a point that rests on nothing,
-    /// which the matrix holds for every point: the friction's drag on the points resting on an
-    /// object is in the minimised potential only, so the matrix does not change with them.
+    /// which the limit's weight is set by; each point's own, with the drag of the friction it
+    /// rests on, is in `point_inertia` and on the matrix's diagonal, so that the solve of a
+    /// resting point's slide is exact in the first iteration.
     fn prepare(
         &mut self,
         mesh: &ClothMesh,
@@ -533,6 +543,7 @@ impl FastImplicit {
                 col_ptr,
                 values,
                 key: None,
+                inertia: Vec::new(),
                 diag: Vec::new(),
             });
         }
@@ -554,14 +565,27 @@ impl FastImplicit {
             level: self.level,
         };
         let topo = &sys.topo;
-        if sys.key == Some(key) {
+        let point_inertia = &self.point_inertia;
+        // NOTE: compared by value: the points resting on a collision object change the
+        // diagonal, and a cloth at rest keeps the same ones from step to step.
+        if sys.key == Some(key)
+            && sys.inertia.len() == topo.free()
+            && topo
+                .free_points
+                .iter()
+                .zip(&sys.inertia)
+                .all(|(&p, &m)| point_inertia[p as usize].to_bits() == m.to_bits())
+        {
             return Ok(());
         }
         sys.key = None;
+        sys.inertia.clear();
+        sys.inertia
+            .extend(topo.free_points.iter().map(|&p| point_inertia[p as usize]));
         let v = &mut sys.values;
         v.fill(0.0);
-        for f in 0..topo.free() {
-            v[sys.col_ptr[f]] = inertia;
+        for (f, &m) in sys.inertia.iter().enumerate() {
+            v[sys.col_ptr[f]] = m;
         }
         for (s, &slot) in mesh.springs().iter().zip(&topo.spring_slot) {
             let k = spring_weight(params, s.kind, inertia, self.level);
@@ -682,6 +706,7 @@ impl Solver for FastImplicit {
         });
 
         let pair_stiffness = params.stiffness(SpringKind::Structural) + inertia;
+        let weight_floor = mass * params.gravity.norm() / (CONTACT_SINK * CONTACT_GAP);
         let reach = 2.0 * mesh.spec().thickness;
         if params.self_collision {
             // NOTE: pairs closer than the reach at the predictions are closer than the reach
@@ -722,6 +747,7 @@ impl Solver for FastImplicit {
                 limits,
                 mu: &mut self.mu,
                 contact_stiffness: diag,
+                contact_floor: weight_floor,
                 pairs: self.self_contacts.pairs(),
                 pair_stiffness,
                 reach,

@@ -59,8 +59,10 @@ pub(crate) struct Objective<'a> {
     pub(crate) limits: [f64; 3],
     /// The stretch limit's scaled multipliers, one vector per spring, m.
     pub(crate) mu: &'a mut [Vec3],
-    /// Per free point, the stiffness of its contact term with a collision object, N/m.
+    /// Per free point, the matrix's diagonal, N/m: its contact term with a collision object is
+    /// half that, and at least `contact_floor`.
     pub(crate) contact_stiffness: &'a [f64],
+    pub(crate) contact_floor: f64,
     /// The self-collision pairs and the stiffness of their term, N/m, and its reach (twice the
     /// thickness), m.
     pub(crate) pairs: &'a [(u32, u32)],
@@ -141,7 +143,7 @@ impl Objective<'_> {
         }
         for (f, &p) in topo.free_points.iter().enumerate() {
             let p = p as usize;
-            let k = 0.5 * self.contact_stiffness[f];
+            let k = (0.5 * self.contact_stiffness[f]).max(self.contact_floor);
             for c in self.colliders {
                 if let Some((dist, n)) = surface_distance(c, &self.x0[p], &x[p]) {
                     let s = dist - CONTACT_GAP;
