@@ -84,9 +84,22 @@ pub(crate) struct Contacts {
     /// The colliders with the friction of one step's drag ([`retime_friction`]), for the other
     /// points.
     impact: Vec<Collider>,
+    /// Whether a point whose prediction reaches an object also takes its drag when it starts
+    /// the step away from it (the step in which it arrives), rather than only a point that
+    /// starts the step on it.
+    approach: bool,
 }
 
 impl Contacts {
+    /// Contacts whose drag also acts on a point in the step in which its prediction reaches
+    /// an object ([`Contacts::approach`]).
+    pub(crate) fn approaching() -> Self {
+        Self {
+            approach: true,
+            ..Self::default()
+        }
+    }
+
     /// Finds the free points of `state` that rest on one of `colliders` (see the module doc):
     /// within [`CONTACT_DISTANCE`] of its surface, and their prediction `y` too. A point
     /// resting on several takes the largest rate.
@@ -120,7 +133,8 @@ impl Contacts {
                 if pinned {
                     continue;
                 }
-                if distance(c, x0, x0) <= CONTACT_DISTANCE && distance(c, x0, y) <= CONTACT_DISTANCE
+                if distance(c, x0, y) <= CONTACT_DISTANCE
+                    && (self.approach || distance(c, x0, x0) <= CONTACT_DISTANCE)
                 {
                     *r = r.max(rate);
                 }

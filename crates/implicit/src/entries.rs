@@ -28,18 +28,18 @@ impl ImplicitEuler {
 }
 
 impl FastImplicit {
-    /// The registry entry of Liu et al. 2013's local/global solver, `fast-implicit`: one step
+    /// The registry entry of the fast implicit solver, `fast-implicit`: one step
     /// per frame, option `iterations` ([`FastImplicit::with_iterations`]).
     pub const ENTRY: SolverEntry = SolverEntry::new(
         "fast-implicit",
-        "Liu et al. 2013 local/global, one prefactored matrix (fast, stiff)",
+        "L-BFGS over one prefactored matrix (Liu et al. 2017), contact inside the step (fast, stiff)",
         build_fast,
     )
     .with_steps_per_frame(1)
     .with_memory_estimate(fast_memory)
     .with_options(&[SolverOption {
         name: "iterations",
-        description: "local/global iterations per step: more is stiffer and closer to implicit",
+        description: "L-BFGS iterations per step at most (it stops earlier on its tolerance): more is stiffer and closer to implicit",
         kind: OptionKind::Integer {
             min: 1,
             max: 1000,

@@ -1,28 +1,39 @@
-//! Liu et al. 2013, "Fast Simulation of Mass-Spring Systems": backward Euler by local/global
-//! iterations with one constant, prefactored matrix.
+//! Backward Euler on one constant, prefactored matrix: the projective-dynamics matrix of Liu et
+//! al. 2013, "Fast Simulation of Mass-Spring Systems", as the initial Hessian of an L-BFGS
+//! minimisation with a line search (Liu, Bouaziz and Kavan 2017, "Quasi-Newton methods for
+//! real-time simulation of hyperelastic materials").
 //!
 //! # Method
 //!
-//! The step minimises the same incremental potential as [`ImplicitEuler`](crate::ImplicitEuler),
-//! `Phi(x) = (1 + c h)/(2 h^2) |x - y|_M^2 + E(x)`, `y = x0 + h v0 / (1 + c h)`, using the
-//! identity `k/2 (|d| - L)^2 = min_{|p| = L} k/2 |d - p|^2` for each spring vector `d`. Starting
-//! from whichever of the prediction `y` and the step's start `x0` has the lower `Phi` (the
-//! springs' part: the limit's term is zero at any allowed state), each iteration does
+//! The step minimises the incremental potential
 //!
 //! ```text
-//! local:   p_s = L_s d_s / |d_s|                        (per spring, closed form)
-//!          q_s = the stretch limit's target (below)
-//! global:  (M (1 + c h) / h^2 + sum_s (k_s + w_s) A_s^T A_s) x
-//!              = M (1 + c h) / h^2 y + M g + sum_s A_s^T (k_s p_s + w_s q_s)
+//! Phi(x) = sum_i m_i (1 + (c + c_f,i) h) / (2 h^2) |x_i - y_i|^2 - sum_i m g . x_i
+//!        + sum_s k_s/2 (|d_s| - L_s)^2 + (the stretch limit's term, below)
+//!        + (the contact terms, below)
 //! ```
 //!
-//! where `A_s x = x_b - x_a`. The matrix is the same for the three coordinates and does not
-//! depend on `x`: it is factored (faer sparse Cholesky, one scalar unknown per free point) only
-//! when `ks`, the density, the step, the drag, a spring toggle, the stretch limit's switch or the
-//! topology changes, and each iteration is two triangular solves with three right-hand sides.
-//! Pinned points are eliminated into the right-hand side. The iterations stop when a global
-//! step moves no point farther than the tolerance ([`FAST_TOLERANCE`] by default), or after the
-//! iteration count (the solver's `iterations` option, [`DEFAULT_ITERATIONS`] by default).
+//! with `y_i` the damped prediction, `d_s = x_b - x_a` a spring's vector and `c_f,i` the drag of
+//! the friction a point rests on (see [Collisions](#collisions)). The matrix
+//!
+//! ```text
+//! A = M (1 + c h) / h^2 + sum_s (k_s + w_s) A_s^T A_s          (A_s x = x_b - x_a)
+//! ```
+//!
+//! is the Hessian of Liu et al.'s local/global form of the springs' part, the same for the
+//! three coordinates and independent of `x`: it is factored (faer sparse Cholesky, one scalar
+//! unknown per free point) only when `ks`, the density, the step, the drag, a spring toggle, the
+//! stretch limit's switch or level, the set of points in contact with a collision object (whose
+//! friction's drag is on the diagonal, see [Collisions](#collisions)) or the topology changes. Each iteration takes the L-BFGS
+//! direction (five curvature pairs, two-loop recursion, `A^-1` as the initial inverse Hessian:
+//! two triangular solves with three right-hand sides) and halves the step along it until `Phi`
+//! falls by the Armijo share of the slope. With no curvature pair the direction is `-A^-1 grad
+//! Phi`, which is exactly Liu et al.'s local/global iteration; the pairs correct it for what
+//! `A` does not describe (the springs' true curvature, the contact terms).
+//! Pinned points are not unknowns. The iterations stop once a full step (not halved) moves no
+//! point farther than the tolerance ([`FAST_TOLERANCE`] by default) with the stretch limit met
+//! within 0.2 % of rest, or after the iteration count (the solver's `iterations` option,
+//! [`DEFAULT_ITERATIONS`] by default), whichever comes first.
 //!
 //! # The stretch limit
 //!
@@ -30,20 +41,19 @@
 //! (Provot's correction): it moves the ends of each over-long spring back to `1.1 L`, one
 //! spring after the other, so a later correction can stretch an earlier spring again, and a
 //! falling cloth keeps springs up to about 1.17 L. Here the limit is part of the minimisation
-//! instead: the constraint `|d_s| <= 1.1 L_s` on the step's positions, in the projective-dynamics
-//! form of a projection in the local step. Its term `w_s/2 |d_s - q_s|^2` pulls each spring
-//! vector towards its projection onto the allowed ball `|q| <= 1.1 L_s`, with a scaled
-//! multiplier `u_s` per spring, a vector (ADMM, Overby et al. 2017), that turns the penalty into
-//! the exact constraint as the iterations converge:
+//! instead: the constraint `|d_s| <= 1.1 L_s` on the step's positions, by the augmented term
+//! `w_s/2 dist(d_s + u_s, B_s)^2` in `Phi`, `B_s` the allowed ball `|q| <= 1.1 L_s`, with a
+//! scaled multiplier `u_s` per spring, a vector (ADMM, Overby et al. 2017), that turns the
+//! penalty into the exact constraint as the iterations converge. After every iteration:
 //!
 //! ```text
 //! v_s  = d_s + u_s
 //! z_s  = v_s min(1, 1.1 L_s / |v_s|)                      (projection onto the ball)
 //! u_s <- v_s - z_s                                        (the tension over w_s)
-//! q_s  = z_s - u_s
 //! ```
 //!
-//! A slack spring gets `u_s = 0` and `q_s = d_s`: its term adds nothing to the right-hand side.
+//! For fixed multipliers the term is convex and continuously differentiable in `d_s`, with the
+//! gradient `w_s (v_s - z_s)`. A slack spring gets `u_s = 0` and a zero term.
 //! A spring already beyond the limit (a state left by the course's sweep, a swap from Verlet,
 //! an edit of `ks`) is pulled towards its projection, weighted against the mass and the other
 //! springs in the same convex solve. `w_s` is [`limit_weight`]: the spring's own stiffness plus
@@ -90,32 +100,55 @@
 //!
 //! # Stability
 //!
-//! Every global step is a convex quadratic solve with a positive-definite matrix, stable for any
-//! step and stiffness. Without the limit each local step and each global step lowers `Phi` (Liu et
-//! al.'s block descent), so even a truncated step ends with `Phi` no higher than at its start.
-//! Starting from `y` alone would bound the result by the springs' energy at `y`, which stiff
-//! springs and a velocity field that stretches them (a collision's or self-collision's push) make
-//! far larger than the energy the cloth has; starting from the lower of `Phi(y)` and `Phi(x0)`
-//! bounds it by `Phi(x0)`, the start's own spring energy plus the kinetic energy the prediction
-//! carries, so a truncated step cannot create energy. With the limit on, the iteration is ADMM,
-//! which need not lower `Phi` at every iteration: for a convex energy and a convex constraint its
-//! standard form converges at any weight, but the springs' energy is not convex (a compressed
-//! spring), so this is an argument rather than a proof, and a run that diverges all the same is
-//! stopped by the front ends' divergence guard. With few iterations the solver under-resolves stiff
-//! springs, which makes the cloth look softer and more damped. At convergence the step equals
-//! [`ImplicitEuler`]'s up to the form of the limit (exact here, a stiff penalty, reached by
-//! multipliers, there). Both implicit solvers are meant to run at one step per frame.
+//! Every accepted iteration lowers `Phi` (the line search takes no step that does not), and the
+//! minimisation starts from whichever of the prediction `y` and the step's start `x0` has the
+//! lower `Phi`. So even a step cut off by the iteration count ends with `Phi` no higher than at
+//! `x0`: the start's potential energy (springs, gravity, contact terms) plus the kinetic energy
+//! the prediction carries, reduced by the drag. The step creates no energy whatever its size and
+//! stiffness; the matrix is positive definite, so every direction is a descent direction or the
+//! iterations restart from `-A^-1 grad Phi`, which is. The one exception is the stretch limit's
+//! multiplier update, which changes the limit's term between iterations (ADMM): for a convex
+//! energy and a convex constraint its standard form converges at any weight, but the springs'
+//! energy is not convex (a compressed spring), so this is an argument rather than a proof, and a
+//! run that diverges all the same is stopped by the front ends' divergence guard. With few
+//! iterations the solver under-resolves stiff springs, which makes the cloth look softer and
+//! more damped. At convergence the step equals [`ImplicitEuler`]'s up to the form of the limit
+//! and of the contacts.
 //!
 //! # Collisions
 //!
-//! The friction of a collision object is a drag on the points resting on it, inside the step:
-//! such a point's mass term is `m (1 + (c + c_f) h) / h^2`, with its own prediction, so the
-//! matrix's diagonal holds it and is refactored when the set of resting points changes (a
-//! cloth at rest on an object keeps the same set). After the solve, self-collision is applied
-//! as Verlet applies it, and the collision objects push points out of them: the resting points
-//! without friction, a point that reaches an object during the step with one step's drag. The
-//! crate's documentation ([Friction](crate#friction)) gives the drag rate `c_f` that stands for
-//! the course's per-step friction, and why the course's friction after a large step cannot.
+//! Contact is part of the minimised potential, as one-sided penalties on the contacts found at
+//! the step's start (in the manner of Vertex Block Descent, Chen et al. 2024), not a push after
+//! the solve:
+//!
+//! - a collision object adds `k_i/2 min(0, s_i(x_i) - delta)^2` for each free point, `s_i` its
+//!   signed distance to the surface on the side the point starts the step on (so a plane's side
+//!   is fixed for the step), `delta` the course's surface offset (0.1 mm) and `k_i` half the
+//!   point's own diagonal of `A` (about as stiff as everything else that holds it, yet not so
+//!   much stiffer than `A` that the L-BFGS steps overshoot it), and at least the stiffness at
+//!   which the point's own weight sinks it a tenth of `delta` (a point of the course's cloth
+//!   pressed with a newton sinks about 20 um into the 0.1 mm margin);
+//! - self-collision adds `k/2 min(0, |x_j - x_i| - 2 t)^2` for each pair of points closer than
+//!   twice the thickness `t` at the step's start or at their predictions, with `k = ks + m (1
+//!   + c h) / h^2`: both points are pushed apart, with equal and opposite forces.
+//!
+//! Each term is a potential that depends on the positions alone and is zero away from contact,
+//! so it is conservative: the minimisation lowers `Phi` with it as with the springs, and what it
+//! stores while a point presses on an object it gives back as the point leaves, never more. A
+//! position push after a frame-long step (the course's collision response, applied after the
+//! solve) would move points by up to the overlap without moving their previous positions: a
+//! velocity of overlap over step, made from nothing. After the solve, a point that the penalty still left inside an object (only under a
+//! force of many newtons) is put onto its surface with its velocity into the object removed and
+//! its previous position moved with it: that only takes kinetic energy out.
+//!
+//! The friction of a collision object is a drag on the points in contact with it, inside the
+//! step: such a point's mass term in `Phi` is `m (1 + (c + c_f) h) / h^2`, with its own
+//! prediction. A point is in contact for the step when its prediction ends within
+//! [`CONTACT_DISTANCE`](crate::CONTACT_DISTANCE) of (or inside) the object, whether it rests
+//! on it or arrives during the step, as the course applies its friction to the whole
+//! displacement of the step in which a point crosses a surface. The crate's documentation
+//! ([Friction](crate#friction)) gives the drag rate `c_f` that stands for the course's per-step
+//! friction, and why the course's friction after a large step cannot.
 //!
 //! # Damping
 //!
@@ -125,21 +158,28 @@
 //!
 //! [`ImplicitEuler`]: crate::ImplicitEuler
 
-use cloth_mesh::{ClothMesh, ClothState, SpringKind, Vec3};
+use cloth_mesh::{ClothMesh, ClothState, SURFACE_OFFSET, SpringKind, Vec3};
 use cloth_solver::{
     Collider, MAX_STRETCH, SolveError, Solver, SpatialHash, StepParams, StepReport,
     max_stretch_ratio,
 };
 
 use crate::cholesky::Cholesky;
-use crate::commit::{commit, hold_still, predict};
+use crate::commit::{hold_still, predict};
 use crate::contact::{Contacts, touches};
+use crate::lbfgs::{Lbfgs, Problem};
 use crate::memory::{Allocation, try_filled};
+use crate::objective::{CONTACT_GAP, Objective, StepProblem, surface_distance};
+use crate::self_contact::SelfContacts;
 use crate::topology::{NONE, Topology};
 
-/// By default the local/global iterations of a step stop once a global step moves no point
+/// By default the iterations of a step stop once a full iteration moves no point
 /// farther than this, metres (0.1 um: a two-hundredth of the 0.1 % stretch of a 2 cm spring).
 pub const FAST_TOLERANCE: f64 = 1e-7;
+
+/// A point's contact term is stiff enough that the point's own weight sinks it at most this
+/// share of the contact margin into it.
+const CONTACT_SINK: f64 = 0.1;
 
 /// The factor between successive levels of the stretch limit's penalty.
 const PENALTY_GROWTH: f64 = 10.0;
@@ -188,7 +228,7 @@ fn penalty_scale(level: u32) -> f64 {
     PENALTY_GROWTH.powi(level as i32)
 }
 
-/// Local/global iterations per step of [`FastImplicit::new`], at most.
+/// Iterations per step of [`FastImplicit::new`], at most.
 pub const DEFAULT_ITERATIONS: u32 = 10;
 
 /// The weight of the stretch limit's projection term of a spring of stiffness `k`, N/m, for a
@@ -203,12 +243,12 @@ pub fn limit_weight(k: f64, inertia: f64) -> f64 {
     k + inertia
 }
 
-/// The fast local/global implicit solver. Owns caches (topology, factored matrix, multiplier
+/// The fast implicit solver. Owns caches (topology, factored matrix, multiplier
 /// warm start) and scratch memory only.
 #[derive(Debug)]
 pub struct FastImplicit {
     system: Option<System>,
-    /// Local/global iterations per step, at most (at least 1).
+    /// Iterations per step, at most (at least 1).
     iterations: u32,
     tolerance: f64,
     /// Scaled multipliers of the stretch limit, m, one vector per spring (warm start).
@@ -243,6 +283,9 @@ pub struct FastImplicit {
     /// it rests on.
     point_inertia: Vec<f64>,
     hash: SpatialHash,
+    /// The pairs of points self-collision acts on in the current step.
+    self_contacts: SelfContacts,
+    lbfgs: Lbfgs,
 }
 
 impl Default for FastImplicit {
@@ -270,6 +313,8 @@ struct System {
     key: Option<MatrixKey>,
     /// The free points' mass terms the factor was computed with.
     inertia: Vec<f64>,
+    /// The matrix's diagonal, per free point, N/m: the stiffness of a point's contact term.
+    diag: Vec<f64>,
 }
 
 const KINDS: [SpringKind; 3] = [
@@ -286,7 +331,7 @@ impl FastImplicit {
         Self::with_iterations(DEFAULT_ITERATIONS)
     }
 
-    /// A new solver doing at most `iterations` local/global iterations per step (0 counts as
+    /// A new solver doing at most `iterations` iterations per step (0 counts as
     /// 1), stopping earlier on the tolerance.
     #[must_use]
     pub fn with_iterations(iterations: u32) -> Self {
@@ -308,13 +353,15 @@ impl FastImplicit {
             raised_from: None,
             windows_at_level: 0,
             held: false,
-            contacts: Contacts::default(),
+            contacts: Contacts::approaching(),
             point_inertia: Vec::new(),
             hash: SpatialHash::default(),
+            self_contacts: SelfContacts::default(),
+            lbfgs: Lbfgs::default(),
         }
     }
 
-    /// Local/global iterations per step, at most.
+    /// Iterations per step, at most.
     #[must_use]
     pub fn iterations(&self) -> u32 {
         self.iterations
@@ -351,8 +398,14 @@ impl FastImplicit {
         let pattern = 8 * 2 * col_ptr.len() as u64 + 8 * row_idx.len() as u64;
         let values = 8 * row_idx.len() as u64;
         // rhs (3 per free point), y, x and the quiet window's checkpoint (3 per point each),
-        // the multipliers (3 per spring).
-        let scratch = 8 * (3 * n + 9 * mesh.len() as u64 + 3 * mesh.springs().len() as u64);
+        // the multipliers (3 per spring); the L-BFGS curvature pairs and vectors (3 per free
+        // point each) and a trial configuration (3 per point); the self-collision cells (2
+        // per point) and pairs (about 4 per point in a folded cloth).
+        let lbfgs = 3 * n * (2 * Lbfgs::HISTORY as u64 + 3) + 3 * mesh.len() as u64;
+        let points = mesh.len() as u64;
+        let scratch = 8 * (3 * n + 9 * points + 3 * mesh.springs().len() as u64 + lbfgs)
+            + 16 * points
+            + 8 * 4 * points;
         topo.bytes() + pattern + values + factor.bytes() + scratch
     }
 
@@ -466,9 +519,10 @@ impl FastImplicit {
     }
 
     /// Makes sure the topology, the symbolic factor and the numeric factor describe `mesh` and
-    /// the current parameters.
-    /// `inertia` is the mass term of a point that rests on nothing, which the limit's weight
-    /// is set by; each point's own is in `point_inertia`.
+    /// the current parameters. `inertia` is the mass term of a point that rests on nothing,
+    /// which the limit's weight is set by; each point's own, with the drag of the friction it
+    /// rests on, is in `point_inertia` and on the matrix's diagonal, so that the solve of a
+    /// resting point's slide is exact in the first iteration.
     fn prepare(
         &mut self,
         mesh: &ClothMesh,
@@ -490,6 +544,7 @@ impl FastImplicit {
                 values,
                 key: None,
                 inertia: Vec::new(),
+                diag: Vec::new(),
             });
         }
         if self.mu.len() != mesh.springs().len() {
@@ -548,6 +603,9 @@ impl FastImplicit {
             }
         }
         sys.chol.factorize(&sys.values, 0.0).map_err(method_error)?;
+        sys.diag.clear();
+        sys.diag
+            .extend(sys.col_ptr[..topo.free()].iter().map(|&c| sys.values[c]));
         sys.key = Some(key);
         Ok(())
     }
@@ -561,15 +619,6 @@ fn spring_weight(params: &StepParams, kind: SpringKind, inertia: f64, level: u32
         k + limit_weight(k, inertia) * penalty_scale(level)
     } else {
         k
-    }
-}
-
-/// The position of `kind` in [`KINDS`].
-fn kind_index(kind: SpringKind) -> usize {
-    match kind {
-        SpringKind::Structural => 0,
-        SpringKind::Shearing => 1,
-        SpringKind::Bending => 2,
     }
 }
 
@@ -644,8 +693,6 @@ impl Solver for FastImplicit {
         let Some(sys) = self.system.as_mut() else {
             return Err(method_error("no linear system was built".to_owned()));
         };
-        let topo = &sys.topo;
-        let n = topo.free();
         let weight = params.gravity * mass;
         if !params.stretch_limit {
             self.mu.fill(Vec3::zeros());
@@ -658,115 +705,137 @@ impl Solver for FastImplicit {
             }
         });
 
-        // NOTE: the iterations only ever lower the incremental potential from their start, so
-        // they start from whichever of the prediction and the step's start has the lower one:
-        // then even a truncated step ends with an energy no higher than the start's (see the
+        let pair_stiffness = params.stiffness(SpringKind::Structural) + inertia;
+        let weight_floor = mass * params.gravity.norm() / (CONTACT_SINK * CONTACT_GAP);
+        let reach = 2.0 * mesh.spec().thickness;
+        if params.self_collision {
+            // NOTE: pairs closer than the reach at the predictions are closer than the reach
+            // plus twice the largest prediction's move at the start: while that move is small
+            // (a cloth at or near rest) one search at the start with the reach so widened
+            // finds them, at half the cost of a search in each configuration.
+            let moved = state
+                .positions
+                .iter()
+                .zip(&self.y)
+                .map(|(a, b)| (a - b).norm_squared())
+                .fold(0.0, f64::max)
+                .sqrt();
+            if moved < 0.25 * reach {
+                self.self_contacts
+                    .find(mesh, &[&state.positions], reach + 2.0 * moved);
+            } else {
+                self.self_contacts
+                    .find(mesh, &[&state.positions, &self.y], reach);
+            }
+        } else {
+            self.self_contacts.clear();
+        }
+        let System {
+            topo, chol, diag, ..
+        } = sys;
+        let free = &topo.free_points;
+        let mut problem = StepProblem {
+            objective: Objective {
+                mesh,
+                topo,
+                params,
+                colliders,
+                inertia: &self.point_inertia,
+                y: &self.y,
+                x0: &state.positions,
+                weight,
+                limits,
+                mu: &mut self.mu,
+                contact_stiffness: diag,
+                contact_floor: weight_floor,
+                pairs: self.self_contacts.pairs(),
+                pair_stiffness,
+                reach,
+            },
+            chol,
+            rhs: &mut self.rhs,
+        };
+        // NOTE: the minimisation only ever lowers the incremental potential from its start, so
+        // it starts from whichever of the prediction and the step's start has the lower one:
+        // then even a truncated step ends with a potential no higher than the start's (see the
         // module doc).
-        let (at_start, at_prediction) = potentials(
-            mesh,
-            params,
-            &self.point_inertia,
-            weight,
-            &state.positions,
-            &self.y,
-        );
+        let at_start = problem.evaluate(&state.positions, None);
+        let at_prediction = problem.evaluate(&self.y, None);
         if at_start < at_prediction {
             self.x.clone_from(&state.positions);
         } else {
             self.x.clone_from(&self.y);
         }
-        self.rhs.resize(3 * n, 0.0);
-        let starts = mesh.start_positions();
+        let outcome = self
+            .lbfgs
+            .minimise(
+                &mut self.x,
+                free,
+                max_iterations,
+                self.tolerance,
+                &mut problem,
+            )
+            .map_err(method_error)?;
+        let iterations = outcome.iterations;
 
-        let mut residual = 0.0;
-        let mut iterations = 0;
-        while iterations < max_iterations {
-            iterations += 1;
-            // Local step (and the limit's multiplier update) and right-hand side together.
-            for (f, &p) in topo.free_points.iter().enumerate() {
-                let b = self.y[p as usize] * self.point_inertia[p as usize] + weight;
-                for axis in 0..3 {
-                    self.rhs[axis * n + f] = b[axis];
-                }
-            }
-            for (i, s) in mesh.springs().iter().enumerate() {
-                let (a, b) = (s.a as usize, s.b as usize);
-                let (fa, fb) = (topo.free_index[a], topo.free_index[b]);
-                if fa == NONE && fb == NONE {
-                    continue;
-                }
-                let k = params.stiffness(s.kind);
-                let w = limits[kind_index(s.kind)];
-                if k == 0.0 && w == 0.0 {
-                    continue;
-                }
-                let d = self.x[b] - self.x[a];
-                let len = d.norm();
-                // NOTE: coincident ends have no direction; fall back on the rest direction.
-                let u = if len > 0.0 {
-                    d / len
-                } else {
-                    (starts[b] - starts[a]) / s.rest
-                };
-                // The weighted targets of the two terms: the spring's p (its rest length along
-                // u) and the limit's q.
-                let mut pull = u * (k * s.rest);
-                if w > 0.0 {
-                    let v = d + self.mu[i];
-                    let r = v.norm();
-                    let cap = MAX_STRETCH * s.rest;
-                    let z = if r > cap { v * (cap / r) } else { v };
-                    let mu = v - z;
-                    self.mu[i] = mu;
-                    pull += (z - mu) * w;
-                }
-                let tie = k + w;
-                if fb != NONE {
-                    let mut g = pull;
-                    if fa == NONE {
-                        g += self.x[a] * tie;
-                    }
-                    add_rhs(&mut self.rhs, n, fb as usize, &g);
-                }
-                if fa != NONE {
-                    let mut g = -pull;
-                    if fb == NONE {
-                        g += self.x[b] * tie;
-                    }
-                    add_rhs(&mut self.rhs, n, fa as usize, &g);
-                }
-            }
-            // Global step.
-            sys.chol
-                .solve_in_place(&mut self.rhs)
-                .map_err(method_error)?;
-            residual = 0.0;
-            for (f, &p) in topo.free_points.iter().enumerate() {
-                let new = Vec3::new(self.rhs[f], self.rhs[n + f], self.rhs[2 * n + f]);
-                residual = f64::max(residual, (new - self.x[p as usize]).norm());
-                self.x[p as usize] = new;
-            }
-            if residual.is_nan() || residual <= self.tolerance {
-                break;
-            }
-        }
-
-        commit(
-            mesh,
-            &self.contacts,
-            params,
-            state,
-            &topo.free_points,
-            &self.x,
-            &mut self.hash,
-        )?;
+        commit_in_step(mesh, colliders, state, free, &self.x, h)?;
         if params.stretch_limit {
-            self.watch(mesh, colliders, state, h, residual <= self.tolerance);
+            self.watch(mesh, colliders, state, h, outcome.converged);
         }
         Ok(StepReport {
             iterations,
-            residual,
+            residual: outcome.residual,
         })
+    }
+}
+
+/// Moves the free points to `x` with `last` at their start-of-step positions, so that `(x -
+/// last) / h` is the step's velocity, then puts back outside a collision object any point that
+/// its contact term left inside: onto the surface (a plane's at the course's offset), with
+/// `last` moved so that the point keeps its velocity but for the part into the object, which
+/// is removed. That correction takes kinetic energy out and moves a point by no more than
+/// the term let it in (micrometres); it gives no point a velocity it did not have.
+///
+/// # Errors
+/// [`SolveError::NonFinite`] for the first non-finite point.
+fn commit_in_step(
+    mesh: &ClothMesh,
+    colliders: &[Collider],
+    state: &mut ClothState,
+    free: &[u32],
+    x: &[Vec3],
+    h: f64,
+) -> Result<(), SolveError> {
+    for &p in free {
+        let p = p as usize;
+        let x0 = state.positions[p];
+        let mut new = x[p];
+        let mut velocity = (new - x0) / h;
+        let mut corrected = false;
+        for c in colliders {
+            let Some((dist, n)) = surface_distance(c, &x0, &new) else {
+                continue;
+            };
+            if dist >= 0.0 {
+                continue;
+            }
+            let lift = match c {
+                Collider::Sphere(_) => -dist,
+                Collider::Plane(_) => SURFACE_OFFSET - dist,
+            };
+            new += n * lift;
+            corrected = true;
+            let into = velocity.dot(&n);
+            if into < 0.0 {
+                velocity -= n * into;
+            }
+        }
+        state.positions[p] = new;
+        state.last[p] = if corrected { new - velocity * h } else { x0 };
+    }
+    match state.first_non_finite() {
+        Some(i) => Err(SolveError::non_finite(mesh, i)),
+        None => Ok(()),
     }
 }
 
@@ -780,44 +849,6 @@ fn fastest_point(mesh: &ClothMesh, state: &ClothState) -> f64 {
         .filter(|(_, pinned)| !**pinned)
         .map(|((x, l), _)| (x - l).norm())
         .fold(0.0, f64::max)
-}
-
-/// The incremental potential `Phi` of the step without the stretch limit, J, up to a common
-/// constant, at the start `x0` and at the prediction `y`: `(1 + c h)/(2 h^2) |x - y|_M^2 +
-/// E_springs(x) - sum_i m g . x_i` (pinned points are the same in both, so they count alike),
-/// in one pass over the springs.
-fn potentials(
-    mesh: &ClothMesh,
-    params: &StepParams,
-    inertia: &[f64],
-    weight: Vec3,
-    x0: &[Vec3],
-    y: &[Vec3],
-) -> (f64, f64) {
-    let (mut at_start, mut at_prediction) = (0.0, 0.0);
-    for (((a, b), &pinned), &inertia) in x0.iter().zip(y).zip(mesh.pinned()).zip(inertia) {
-        if !pinned {
-            at_start += 0.5 * inertia * (a - b).norm_squared() - weight.dot(a);
-            at_prediction -= weight.dot(b);
-        }
-    }
-    for s in mesh.springs() {
-        let k = params.stiffness(s.kind);
-        if k != 0.0 {
-            let (i, j) = (s.a as usize, s.b as usize);
-            let e = (x0[j] - x0[i]).norm() - s.rest;
-            let f = (y[j] - y[i]).norm() - s.rest;
-            at_start += 0.5 * k * e * e;
-            at_prediction += 0.5 * k * f * f;
-        }
-    }
-    (at_start, at_prediction)
-}
-
-fn add_rhs(rhs: &mut [f64], n: usize, f: usize, g: &Vec3) {
-    rhs[f] += g.x;
-    rhs[n + f] += g.y;
-    rhs[2 * n + f] += g.z;
 }
 
 #[cfg(test)]

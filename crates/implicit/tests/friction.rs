@@ -53,7 +53,12 @@ fn points_resting_on_a_slope_slide_at_the_terminal_speed_of_the_friction_drag_at
         })
         .collect();
     let solvers: [Build; 2] = [
-        ("fast-implicit", || Box::new(FastImplicit::new())),
+        // NOTE: converged to rounding: the fast solver stops by default once an iteration
+        // moves no point farther than 0.1 um, which here leaves the speed off by about a
+        // millionth, and this test is about the drag's rate, not about that tolerance.
+        ("fast-implicit", || {
+            Box::new(FastImplicit::with_iterations(200).with_tolerance(1e-15))
+        }),
         ("implicit", || Box::new(ImplicitEuler::new())),
     ];
     for steps_per_frame in [1, 5, 30] {
