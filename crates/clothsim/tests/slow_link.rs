@@ -287,7 +287,14 @@ impl Drop for Link {
 #[test]
 #[ignore = "timed against a 300 ms bound: run in release on a quiet machine (CI's ignored suite)"]
 fn over_16_kb_per_second_space_shows_paused_and_q_leaves_within_300_ms() {
-    let mut link = Link::start(&["pinned4"], 200, 60, FarEnd::Model);
+    // Undamped, so the cloth is still swinging (and the link still busy) when space is
+    // pressed: a settled cloth writes next to nothing and would prove nothing.
+    let mut link = Link::start(
+        &["pinned4", "--set", "cloth.damping=0"],
+        200,
+        60,
+        FarEnd::Model,
+    );
     link.wait("UI", Duration::from_secs(60), |f| {
         f.alternate && f.row(0).contains("RUNNING") && f.answers > 0
     });
@@ -307,11 +314,6 @@ fn over_16_kb_per_second_space_shows_paused_and_q_leaves_within_300_ms() {
     let paused = link.wait("PAUSED", Duration::from_secs(20), |f| {
         f.row(0).contains("PAUSED")
     });
-    link.key(b" ");
-    link.wait("RUNNING", Duration::from_secs(20), |f| {
-        f.row(0).contains("RUNNING")
-    });
-    sleep(Duration::from_secs(2));
     link.key(b"q");
     let left = link.wait("the shell's screen", Duration::from_secs(20), |f| {
         !f.alternate
@@ -474,6 +476,10 @@ fn the_drawing_rate_never_exceeds_fps_on_a_fast_link() {
             fps.unwrap_or_else(|| panic!("no fps in the header: {row}"))
         })
         .collect();
-    assert!(rates.iter().all(|&r| r <= 10.0), "{rates:?}");
+    // NOTE: the header's rate is the draws of a window of a second or a little more, shown
+    // rounded: at exactly --fps a window can hold one draw more than fps (a fencepost), so the
+    // bound is fps + 1; a key's draw added to the slots' (three keys a window here) would show
+    // fps + 3.
+    assert!(rates.iter().all(|&r| r <= 11.0), "{rates:?}");
     link.key(b"q");
 }
