@@ -162,7 +162,7 @@ impl Link {
         };
         let pty = openpty(&size, None).expect("a pseudo-terminal");
         let slave = File::from(pty.slave);
-        // A session of its own, so the binary's terminal is this one and not the test's.
+        // setsid: the pty becomes the binary's controlling terminal, not the test's.
         let child = Command::new("setsid")
             .arg(env!("CARGO_BIN_EXE_clothsim"))
             .args(args)
