@@ -109,31 +109,6 @@ const NAME_MAX: usize = 255;
 /// Bytes the temporary file's name (`.NAME.XXXXXX`) adds to the result's name.
 const TEMPORARY_EXTRA: usize = 8;
 
-/// What a path is, in words, when it is not a regular file or a folder; `None` otherwise.
-fn special_kind(meta: &fs::Metadata) -> Option<&'static str> {
-    let t = meta.file_type();
-    if t.is_file() || t.is_dir() {
-        return None;
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if t.is_fifo() {
-            return Some("a FIFO (named pipe)");
-        }
-        if t.is_char_device() {
-            return Some("a character device");
-        }
-        if t.is_block_device() {
-            return Some("a block device");
-        }
-        if t.is_socket() {
-            return Some("a socket");
-        }
-    }
-    Some("not a regular file")
-}
-
 /// Checks, before any work is done, that `path` can be a result file, so a long run never ends
 /// in a write that was bound to fail: not a folder, not a FIFO, device or socket (a FIFO
 /// without a reader would block; results are files), in a folder that exists, with a name
@@ -169,7 +144,8 @@ pub fn check_target(path: &Path) -> anyhow::Result<()> {
             path.join("state.json").display()
         );
     }
-    if let Some(kind) = existing.as_ref().and_then(special_kind) {
+    // A folder was refused above; the scene crate's words name every other kind alike.
+    if let Some(kind) = existing.as_ref().and_then(cloth_scene::special_kind) {
         bail!(
             "{} is {kind}; results are written to regular files (without --out a state goes to \
              standard output, which can be piped)",
