@@ -8,7 +8,7 @@
 use std::fmt::Write as _;
 use std::str::FromStr;
 
-use cloth_mesh::{ClothState, Collider, Vec3};
+use cloth_mesh::{ClothMesh, ClothState, Collider, Vec3};
 use cloth_render::{
     AsciiFrame, Bounds, ColorChoice, ColorDepth, ColorEnv, Extent, FrameSize, Mode, RenderError,
     RenderOptions, Renderer, View, ViewSpec,
@@ -127,6 +127,10 @@ pub struct Args {
     /// the scene's. Frame 0 is that state.
     #[arg(long, value_name = "STATE.json")]
     from: Option<std::path::PathBuf>,
+    /// Touch the cloth as a script says (grab, drag, release, poke, pin, unpin, cut), as
+    /// `simulate --actions` does; docs/files-and-output.md gives the format.
+    #[arg(long, value_name = "FILE", value_hint = clap::ValueHint::FilePath, conflicts_with = "vary")]
+    actions: Option<std::path::PathBuf>,
     /// Most memory the run may take (e.g. 512M, 4G; powers of 1024): a cloth whose solver,
     /// states and frames would need more is refused before they are allocated. Default: the
     /// memory the system has available.
@@ -239,7 +243,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     }
     let cast = args.format == Format::Cast;
     let fps = scene.params.frames_per_sec;
-    let diverged = simulate(&scene, &choice, registry, args, &start, |f, state| {
+    let diverged = simulate(&scene, &choice, registry, args, &start, |f, mesh, state| {
         let now = Bounds::of_scene(&state.positions, &scene.colliders)?;
         let fitted = extent.map_or(now, |e| e.union(&now));
         if extent.is_some() {
@@ -248,9 +252,9 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         for (view, panel) in views.iter().zip(panels.iter_mut()) {
             let spec = ViewSpec {
                 extent: Extent::Fixed(orbit_extent(*view, fitted, &start_box)),
-                ..ViewSpec::new(*view, &scene.mesh)
+                ..ViewSpec::new(*view, mesh)
             };
-            renderer.render(&scene.mesh, state, &scene.colliders, &spec, &options, panel)?;
+            renderer.render(mesh, state, &scene.colliders, &spec, &options, panel)?;
         }
         text.clear();
         if !first && !cast {
@@ -556,11 +560,14 @@ fn simulate(
     registry: &Registry,
     args: &Args,
     start: &ClothState,
-    mut each: impl FnMut(u64, &ClothState) -> anyhow::Result<()>,
+    mut each: impl FnMut(u64, &ClothMesh, &ClothState) -> anyhow::Result<()>,
 ) -> anyhow::Result<Option<(u64, Divergence)>> {
     let mut run = Run::new(scene.clone(), registry.clone(), Some(choice.entry.name()))?;
     run.set_recording(false);
     run.start_from(start.clone(), 0, 0.0);
+    let mut actions = (args.actions.as_deref())
+        .map(|path| cloth_run::actions::Actions::read(path, run.scene.mesh.len()))
+        .transpose()?;
     let mut progress = Progress::new(
         args.progress,
         &scene.origin,
@@ -570,10 +577,14 @@ fn simulate(
     );
     let mut frames = || -> anyhow::Result<Option<(u64, Divergence)>> {
         if printed(0, args.frames, args.every) {
-            each(0, &run.state)?;
+            each(0, &run.scene.mesh, &run.state)?;
         }
         for f in 1..=args.frames {
-            match run.step_frame_with(&mut || progress.step()).map_err(|f| *f) {
+            let stepped = match &mut actions {
+                Some(a) => a.step_frame(&mut run, &mut || progress.step())?,
+                None => run.step_frame_with(&mut || progress.step()),
+            };
+            match stepped.map_err(|f| *f) {
                 Ok(()) => {}
                 Err(Fault {
                     cause: Cause::Diverged(d),
@@ -581,7 +592,7 @@ fn simulate(
                 }) => {
                     // The last good frame is shown, as the live UI shows it.
                     if f > 1 && !printed(f - 1, args.frames, args.every) {
-                        each(f - 1, &run.state)?;
+                        each(f - 1, &run.scene.mesh, &run.state)?;
                     }
                     return Ok(Some((f, d)));
                 }
@@ -596,7 +607,7 @@ fn simulate(
                 }
             }
             if printed(f, args.frames, args.every) {
-                each(f, &run.state)?;
+                each(f, &run.scene.mesh, &run.state)?;
             }
         }
         Ok(None)
@@ -605,7 +616,7 @@ fn simulate(
     progress.finish();
     if let Ok(None) = &result
         && let Some(warning) =
-            cloth_run::headless::stretch_warning(scene, &run.settings.params, &run.state)
+            cloth_run::headless::stretch_warning(&run.scene, &run.settings.params, &run.state)
     {
         // Nowhere else to say it; a lost warning does not change the frames printed.
         use std::io::Write as _;

@@ -53,8 +53,9 @@ pub struct Args {
     #[arg(long, value_name = "STATE.json", value_hint = clap::ValueHint::FilePath)]
     from: Option<PathBuf>,
     /// Touch the cloth as a script says: JSON lines of a frame and an action (grab a point
-    /// and hold it at a position, drag it, release it, poke it), each applied once that many
-    /// frames have been stepped; docs/files-and-output.md gives the format.
+    /// and hold it at a position, drag it, release it, poke it, pin or unpin it, cut the
+    /// springs a stroke crosses), each applied once that many frames have been stepped;
+    /// docs/files-and-output.md gives the format.
     #[arg(long, value_name = "FILE", value_hint = clap::ValueHint::FilePath, conflicts_with = "vary")]
     actions: Option<PathBuf>,
     /// Progress on stderr: auto (a bar when stderr is a terminal), always (also a line every
@@ -213,10 +214,11 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let mut done = 0;
     for frame in 1..=args.frames {
         let started = std::time::Instant::now();
-        if let Some(a) = &mut actions {
-            a.apply_due(&mut run)?;
+        let stepped = match &mut actions {
+            Some(a) => a.step_frame(&mut run, &mut || progress.step())?,
+            None => run.step_frame_with(&mut || progress.step()),
         }
-        let stepped = run.step_frame_with(&mut || progress.step()).map_err(|f| *f);
+        .map_err(|f| *f);
         let time = frame as f64 / params.frames_per_sec;
         match stepped {
             Ok(()) => {}
@@ -246,7 +248,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         done = frame;
         if let Some(table) = stats.as_mut() {
             table.push(&StatsRow::measure(
-                &scene.mesh,
+                &run.scene.mesh,
                 &run.state,
                 point_mass,
                 params.dt(),
@@ -259,10 +261,12 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         if let Some(a) = animation.as_mut()
             && frame.is_multiple_of(every)
         {
-            a.push(&scene.mesh, start_frames + frame, &run.state.positions)?;
+            a.push(&run.scene.mesh, start_frames + frame, &run.state.positions)?;
         }
     }
     progress.finish();
+    // NOTE: a cut or a pin by an action changed the mesh: what is written is the cloth run.
+    let scene = std::sync::Arc::clone(&run.scene);
     // The table records the run, a diverged one too (up to its last good frame).
     if let Some(table) = stats {
         table.finish()?;

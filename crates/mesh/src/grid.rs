@@ -142,16 +142,19 @@ pub struct Spring {
     pub kind: SpringKind,
 }
 
-/// The immutable topology of a cloth: start positions, pins, springs and triangles.
+/// The immutable topology of a cloth: start positions, pins, springs and triangles. A change by
+/// hand (a pin, a cut) makes a new mesh: see [`ClothMesh::with_pin`] and [`ClothMesh::cut`].
 ///
 /// Points are row-major with x fastest (`index = y * nw + x`), as in the course.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClothMesh {
-    spec: GridSpec,
+    pub(crate) spec: GridSpec,
     start: Vec<Vec3>,
-    pinned: Vec<bool>,
-    springs: Vec<Spring>,
-    triangles: Vec<[u32; 3]>,
+    pub(crate) pinned: Vec<bool>,
+    pub(crate) springs: Vec<Spring>,
+    pub(crate) triangles: Vec<[u32; 3]>,
+    /// Springs cut by hand (see [`ClothMesh::cut`]); 0 for the grid as built.
+    pub(crate) cut: usize,
 }
 
 impl ClothMesh {
@@ -222,6 +225,7 @@ impl ClothMesh {
             pinned,
             springs,
             triangles,
+            cut: 0,
         })
     }
 

@@ -13,6 +13,7 @@
 //! This crate does no I/O and knows nothing of solvers or rendering. All lengths are in metres.
 
 mod collider;
+mod cut;
 mod grid;
 mod normals;
 mod params;
@@ -21,6 +22,7 @@ mod state;
 mod wind;
 
 pub use collider::{Collider, Plane, SURFACE_OFFSET, Sphere, apply_colliders};
+pub use cut::{Knife, Sight};
 pub use grid::{
     ClothMesh, EXTENT_RANGE, GridSpec, MAX_POINTS, MeshError, Orientation, Spring, SpringKind,
 };

@@ -28,6 +28,6 @@ pub mod study;
 
 pub use cloth_solver::{Registry, SolverEntry};
 pub use run::{
-    Cause, Command, Fault, HISTORY, Held, Run, Sample, Settings, Touch, numeric_options,
+    Cause, Command, Fault, HISTORY, Held, Run, Sample, Settings, Timed, Touch, numeric_options,
 };
 pub use solvers::default_registry;

@@ -8,7 +8,7 @@
 use std::collections::VecDeque;
 use std::sync::Arc;
 
-use cloth_mesh::{ClothState, Vec3};
+use cloth_mesh::{ClothMesh, ClothState, Knife, Sight, Vec3};
 use cloth_scene::Scene;
 use cloth_solver::{OptionKind, Registry, SolveError, Solver, SolverEntry, StepParams};
 use serde_json::Value;
@@ -59,6 +59,8 @@ pub enum Cause {
     Diverged(Divergence),
     /// This copy of a run holds no solver (see [`Run::release_solver`]).
     NoSolver,
+    /// The solver could not be built again for a cloth whose pins or springs a hand changed.
+    Unbuildable,
 }
 
 /// A change asked of a running simulation: what the UI sends to the thread that steps it.
@@ -112,6 +114,38 @@ pub enum Touch {
         /// The velocity added, m/s.
         velocity: Vec3,
     },
+    /// Pin point `point` where it is now, at rest (`pinned`), or let it go. A reset goes back
+    /// to the scene's pins; a scene saved from the run keeps the pins it has.
+    Pin {
+        /// The point's index.
+        point: usize,
+        /// Pinned or free.
+        pinned: bool,
+    },
+    /// Cut every spring the knife's stroke crosses, as seen from its sight; the triangles that
+    /// lose an edge go too. A reset restores the cloth.
+    Cut(Knife),
+}
+
+impl Touch {
+    /// Whether it changes the cloth's topology (its pins or springs), so every solver is built
+    /// again for the new mesh.
+    #[must_use]
+    pub fn changes_mesh(&self) -> bool {
+        matches!(self, Touch::Pin { .. } | Touch::Cut(_))
+    }
+}
+
+/// A touch and the moment it was applied: after `step` steps of the frame that follows
+/// `frame` frames (what an actions file replays, see [`crate::actions`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Timed {
+    /// Frames completed when it was applied.
+    pub frame: u64,
+    /// Steps of the next frame taken when it was applied.
+    pub step: u32,
+    /// What it did.
+    pub touch: Touch,
 }
 
 /// A point held by the hand and where the hand is.
@@ -138,9 +172,12 @@ pub struct Settings {
 
 /// The running cloth.
 pub struct Run {
-    /// The scene as loaded (its values are what "restore" goes back to), shared with the
-    /// copies of this simulation that a stepping thread runs: one mesh for both.
+    /// The scene being run: as loaded (its values are what "restore" goes back to), with the
+    /// pins and cuts made by hand since the last reset. Shared with the copies of this
+    /// simulation that a stepping thread runs: one mesh for both until a hand changes it.
     pub scene: Arc<Scene>,
+    /// The scene as loaded, before any pin or cut by hand: what a reset goes back to.
+    loaded: Arc<Scene>,
     /// Live parameters and objects.
     pub settings: Settings,
     /// The cloth's positions: the one source of truth.
@@ -175,6 +212,9 @@ pub struct Run {
     pub fault: Option<Fault>,
     /// The point the hand holds, if any.
     pub held: Option<Held>,
+    /// Every touch applied since the start or the last reset, in order: a live interaction
+    /// written out as an actions file replays to the same state.
+    pub touched: Vec<Timed>,
     pub(crate) guard: Guard,
     /// Whether the divergence guard judges each frame (see [`Run::set_guarded`]).
     guarded: bool,
@@ -227,6 +267,7 @@ impl Run {
             last_good: state.clone(),
             state,
             settings,
+            loaded: Arc::clone(&scene),
             scene,
             solver: Some(built),
             registry,
@@ -241,6 +282,7 @@ impl Run {
             peak_kinetic: 0.0,
             fault: None,
             held: None,
+            touched: Vec::new(),
             guard: Guard::new(),
             guarded: true,
             recording: true,
@@ -441,6 +483,11 @@ impl Run {
     /// Back to the start positions at rest, keeping the live settings (the course's R key).
     pub fn reset(&mut self) {
         self.held = None;
+        self.touched.clear();
+        if !Arc::ptr_eq(&self.scene, &self.loaded) {
+            self.scene = Arc::clone(&self.loaded);
+            self.rebuild_solver();
+        }
         self.state.reset(&self.scene.mesh);
         self.last_good.clone_from(&self.state);
         if let Some(s) = &mut self.solver {
@@ -560,8 +607,80 @@ impl Run {
                     self.state.last[point] -= velocity * dt;
                 }
             }
+            Touch::Pin { point, pinned } => {
+                point_ok(point)?;
+                if self.scene.mesh.pinned()[point] != pinned {
+                    if self.held.is_some_and(|h| h.point == point) {
+                        self.held = None;
+                    }
+                    let mesh = self.scene.mesh.with_pin(point, pinned);
+                    if pinned {
+                        // Pinned where it is, at rest: a pin never moves.
+                        self.state.last[point] = self.state.positions[point];
+                    }
+                    self.change_mesh(mesh.expect("the point was checked"));
+                }
+            }
+            Touch::Cut(knife) => {
+                for (what, v) in [("knife's start", &knife.from), ("knife's end", &knife.to)] {
+                    finite(what, v)?;
+                }
+                let (Sight::Along(v) | Sight::From(v)) = knife.sight;
+                finite("knife's sight", &v)?;
+                if let Some(mesh) = self.scene.mesh.cut(&self.state.positions, &knife) {
+                    self.change_mesh(mesh);
+                }
+            }
         }
+        self.touched.push(Timed {
+            frame: self.frames,
+            step: self.step_in_frame,
+            touch,
+        });
         Ok(())
+    }
+
+    /// Steps of the frame under way taken so far (0 between frames).
+    #[must_use]
+    pub fn step_in_frame(&self) -> u32 {
+        self.step_in_frame
+    }
+
+    /// Runs on `mesh` from now on (a pin or a cut by hand): the scene being run gets it, with
+    /// its pin list, and the solver is built again for it, keeping the motion.
+    fn change_mesh(&mut self, mesh: ClothMesh) {
+        let mut scene = (*self.scene).clone();
+        let pins = mesh.spec().pinned.iter();
+        scene.file.cloth.pinned = Some(pins.map(|&(x, y)| [x as i64, y as i64]).collect());
+        scene.mesh = Arc::new(mesh);
+        self.scene = Arc::new(scene);
+        self.rebuild_solver();
+    }
+
+    /// Builds the solver again for the scene's mesh (after its topology changed), with the
+    /// options it has; the state carries the motion. A solver that cannot be built for the new
+    /// mesh stops the run with the reason.
+    fn rebuild_solver(&mut self) {
+        if self.solver.is_none() {
+            return;
+        }
+        match self.choice.build(&self.scene.mesh) {
+            Ok(built) => self.solver = Some(built),
+            Err(e) => {
+                let fault = Fault {
+                    time: self.time,
+                    what: format!(
+                        "{} cannot run the changed cloth: {e:#}",
+                        self.entry().name()
+                    ),
+                    advice: "press r to reset the cloth".to_owned(),
+                    resumable: false,
+                    frame: self.frames,
+                    cause: Cause::Unbuildable,
+                };
+                self.fault = Some(fault);
+            }
+        }
     }
 
     /// One step of `dt`. On failure the state goes back to the last good frame and
@@ -1045,6 +1164,135 @@ mod tests {
         let e = run.touch(Touch::Drag { to: Vec3::zeros() }).unwrap_err();
         assert!(e.contains("grab one first"), "{e}");
         assert_eq!(run.state, before);
+    }
+
+    /// A stroke seen from above across pinned4 between columns 24 and 25.
+    fn down_the_middle() -> Knife {
+        let x = 24.5 / 49.0;
+        Knife {
+            from: Vec3::new(x, 2.0, -0.5),
+            to: Vec3::new(x, 2.0, 1.5),
+            sight: Sight::Along(-Vec3::y()),
+        }
+    }
+
+    #[test]
+    fn a_cut_down_the_middle_parts_pinned4_under_every_solver_and_a_reset_makes_it_whole() {
+        let registry = crate::default_registry();
+        for entry in registry.entries() {
+            let name = entry.name();
+            let scene = cloth_scene::load("pinned4", &[]).unwrap();
+            let mut run = Run::new(scene, registry.clone(), Some(name)).unwrap();
+            let whole = Arc::clone(&run.scene.mesh);
+            run.touch(Touch::Cut(down_the_middle())).unwrap();
+            assert!(!run.scene.mesh.is_whole(), "{name}");
+            assert_eq!(run.touched.len(), 1);
+            // Each half hangs from its own two corners: its free edge sags away from the
+            // other's. The halves start one spacing (2.04 cm) apart across the cut.
+            for _ in 0..60 {
+                run.step_frame()
+                    .unwrap_or_else(|f| panic!("{name}: {}", f.what));
+            }
+            let nw = run.scene.mesh.nw();
+            let p = &run.state.positions;
+            let (left, right): (Vec<_>, Vec<_>) = (0..p.len()).partition(|i| i % nw <= 24);
+            let gap = left
+                .iter()
+                .flat_map(|&i| right.iter().map(move |&j| (p[i] - p[j]).norm()))
+                .fold(f64::INFINITY, f64::min);
+            assert!(gap > 0.03, "{name}: the halves are {gap} m apart");
+            run.reset();
+            assert!(Arc::ptr_eq(&run.scene.mesh, &whole), "{name}");
+            assert!(run.touched.is_empty());
+            run.step_frame().unwrap();
+        }
+    }
+
+    #[test]
+    fn a_pin_holds_the_point_where_it_is_and_a_reset_goes_back_to_the_scenes_pins() {
+        let scene = cloth_scene::load("pinned4", &[]).unwrap();
+        let mut run = Run::new(scene, crate::default_registry(), None).unwrap();
+        for _ in 0..10 {
+            run.step_frame().unwrap();
+        }
+        let centre = run.scene.mesh.index(25, 25);
+        let at = run.state.positions[centre];
+        run.touch(Touch::Pin {
+            point: centre,
+            pinned: true,
+        })
+        .unwrap();
+        assert!(run.scene.mesh.pinned()[centre]);
+        assert_eq!(run.scene.file.cloth.pinned.as_ref().unwrap().len(), 5);
+        for _ in 0..10 {
+            run.step_frame().unwrap();
+        }
+        assert_eq!(run.state.positions[centre], at, "a pin never moves");
+        // A corner let go falls.
+        let corner = run.scene.mesh.index(0, 0);
+        let before = run.state.positions[corner];
+        run.touch(Touch::Pin {
+            point: corner,
+            pinned: false,
+        })
+        .unwrap();
+        for _ in 0..10 {
+            run.step_frame().unwrap();
+        }
+        assert!(run.state.positions[corner].y < before.y - 0.01);
+        run.reset();
+        assert_eq!(run.scene.mesh.pinned(), run.loaded.mesh.pinned());
+        assert!(run.scene.file.cloth.pinned.as_ref().unwrap().len() == 4);
+    }
+
+    #[test]
+    fn a_live_interaction_written_out_replays_to_the_same_bits() {
+        let scene = cloth_scene::load("pinned4", &[]).unwrap();
+        let mut live = Run::new(scene.clone(), crate::default_registry(), None).unwrap();
+        let point = live.scene.mesh.index(30, 20);
+        let frame = |run: &mut Run, steps: u32| {
+            for _ in 0..steps {
+                run.step().unwrap();
+            }
+        };
+        let spf = live.settings.params.steps_per_frame;
+        frame(&mut live, 5 * spf + 7);
+        let to = live.state.positions[point] + Vec3::new(0.0, 0.2, 0.1);
+        live.touch(Touch::Grab { point, to }).unwrap();
+        frame(&mut live, 2 * spf + 3);
+        live.touch(Touch::Drag {
+            to: to + Vec3::new(0.1, 0.0, 0.0),
+        })
+        .unwrap();
+        frame(&mut live, spf);
+        live.touch(Touch::Release).unwrap();
+        live.touch(Touch::Cut(down_the_middle())).unwrap();
+        frame(&mut live, 3 * spf + 11);
+        live.touch(Touch::Pin {
+            point,
+            pinned: true,
+        })
+        .unwrap();
+        live.touch(Touch::Poke {
+            point: point + 1,
+            velocity: Vec3::new(0.0, 1.0, 0.0),
+        })
+        .unwrap();
+        let rest = 20 * spf - live.step_in_frame();
+        frame(&mut live, rest);
+        let text: String = live
+            .touched
+            .iter()
+            .map(|t| crate::actions::line(t) + "\n")
+            .collect();
+        let mut script =
+            crate::actions::Actions::parse(&text, "recorded", live.scene.mesh.len()).unwrap();
+        let mut replay = Run::new(scene, crate::default_registry(), None).unwrap();
+        while replay.frames < live.frames {
+            script.step_frame(&mut replay, &mut || {}).unwrap().unwrap();
+        }
+        assert_eq!(replay.state, live.state);
+        assert_eq!(replay.scene.mesh, live.scene.mesh);
     }
 
     #[test]
