@@ -639,6 +639,27 @@ impl Camera {
         }
     }
 
+    /// The world point drawn at pixel position `(x, y)` with depth key `depth` (see
+    /// [`Projected::depth`]): the inverse of [`Self::project`]. With the depth key of a point,
+    /// it gives where that point would be if moved across the screen in the plane through it
+    /// parallel to the view, which is how a hand drags a point.
+    #[must_use]
+    pub fn unproject(&self, x: f64, y: f64, depth: f64) -> Vec3 {
+        match self.projection {
+            Projection::Orthographic { .. } => {
+                let (origin, _) = self.ray(x, y);
+                origin + self.forward * depth
+            }
+            Projection::Perspective { focal, .. } => {
+                let z = -1.0 / depth;
+                let dir = self.forward
+                    + self.right * ((x - self.half_w) / focal)
+                    + self.up * ((self.half_h - y) * self.aspect / focal);
+                self.origin + dir * z
+            }
+        }
+    }
+
     /// The nearest distance a perspective camera draws, metres (0 for orthographic).
     #[must_use]
     pub fn near(&self) -> f64 {

@@ -14,6 +14,8 @@ pub const SPHERE_RAMP: &[char] = &['^', '"', 'c', 'u', 'o', 'a', 'e', 'Q', 'B'];
 pub const FLOOR_GLYPH: char = '_';
 /// A pinned point.
 pub const PIN_GLYPH: char = 'O';
+/// The point a hand holds.
+pub const HAND_GLYPH: char = '&';
 
 /// The 4 x 4 Bayer matrix: thresholds in a pattern that spreads each level evenly.
 const BAYER4: [[u8; 4]; 4] = [[0, 8, 2, 10], [12, 4, 14, 6], [3, 11, 1, 9], [15, 7, 13, 5]];
@@ -60,7 +62,7 @@ mod tests {
         let all: Vec<char> = [FRONT_RAMP, BACK_RAMP, SPHERE_RAMP]
             .concat()
             .into_iter()
-            .chain([FLOOR_GLYPH, PIN_GLYPH])
+            .chain([FLOOR_GLYPH, PIN_GLYPH, HAND_GLYPH])
             .collect();
         for (i, a) in all.iter().enumerate() {
             assert_ne!(*a, ' ');

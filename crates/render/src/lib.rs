@@ -53,8 +53,8 @@ pub use color::{ColorChoice, ColorDepth, ColorEnv, TermColor, xterm_rgb};
 pub use error::RenderError;
 pub use frame::{AsciiFrame, Cell, FrameSize, MAX_HEIGHT, MAX_WIDTH, MIN_HEIGHT, MIN_WIDTH, Rgb};
 pub use glyphs::{
-    BACK_RAMP, FLOOR_GLYPH, FRONT_RAMP, PIN_GLYPH, SPHERE_RAMP, bayer_threshold, dithered_level,
-    ramp_glyph,
+    BACK_RAMP, FLOOR_GLYPH, FRONT_RAMP, HAND_GLYPH, PIN_GLYPH, SPHERE_RAMP, bayer_threshold,
+    dithered_level, ramp_glyph,
 };
 pub use options::{Light, Mode, RenderOptions};
 pub use renderer::Renderer;

@@ -118,6 +118,9 @@ pub struct RenderOptions {
     pub show_pins: bool,
     /// Draw spheres and planes (default true).
     pub show_colliders: bool,
+    /// Where a hand holds the cloth, m: marked with [`crate::HAND_GLYPH`] when nothing hides
+    /// it (default none).
+    pub hand: Option<Vec3>,
     /// Draw a small axis legend in the bottom-left corner of orthographic views (default false).
     pub legend: bool,
     /// Fill in cell colours (default true). When the output will be shown without colour, set
@@ -138,6 +141,7 @@ impl Default for RenderOptions {
             two_sided: true,
             show_pins: true,
             show_colliders: true,
+            hand: None,
             legend: false,
             color: true,
         }
@@ -174,6 +178,15 @@ impl RenderOptions {
         let v = match self.light {
             Light::Point(p) | Light::Direction(p) => p,
         };
+        if let Some(h) = self.hand
+            && !h.iter().all(|c| c.is_finite())
+        {
+            return Err(RenderError::BadOption {
+                name: "hand",
+                value: format!("{:?}", h.as_slice()),
+                allowed: "three finite numbers",
+            });
+        }
         let zero_direction = matches!(self.light, Light::Direction(d) if d.norm() == 0.0);
         if !v.iter().all(|c| c.is_finite()) || zero_direction {
             return Err(RenderError::BadOption {

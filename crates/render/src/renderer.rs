@@ -5,7 +5,8 @@ use cloth_mesh::{Collider, Plane, Sphere};
 
 use crate::bounds::plane_basis;
 use crate::glyphs::{
-    BACK_RAMP, FLOOR_GLYPH, FRONT_RAMP, PIN_GLYPH, SPHERE_RAMP, bayer_threshold, ramp_glyph,
+    BACK_RAMP, FLOOR_GLYPH, FRONT_RAMP, HAND_GLYPH, PIN_GLYPH, SPHERE_RAMP, bayer_threshold,
+    ramp_glyph,
 };
 use crate::raster::{LineFill, Material, Target};
 use crate::{
@@ -21,6 +22,9 @@ const PIN_DEPTH_TOLERANCE: f64 = 0.02;
 /// rendering allocates nothing once the first frame of a given size has been drawn.
 #[derive(Debug, Default, Clone)]
 pub struct Renderer {
+    /// The camera of the last frame drawn, its pixels per cell and its width in pixels: what
+    /// [`Renderer::surface_at`] reads the depth buffer with.
+    last: Option<(Camera, (usize, usize), usize)>,
     normals: Vec<Vec3>,
     screen: Vec<Option<Projected>>,
     vertex_shade: Vec<[f32; 2]>,
@@ -145,6 +149,7 @@ impl Renderer {
             view
         };
         let camera = Camera::new(fitting, &content, pw, ph, aspect)?;
+        self.last = Some((camera, (sx, sy), pw));
         let lighting = Lighting::new(options);
 
         // NOTE: clear + resize keeps the capacity, so after the first frame of a size nothing
@@ -249,10 +254,94 @@ impl Renderer {
                 }
             }
         }
+        if let Some(hand) = options.hand
+            && let Some(p) = camera.project(hand)
+            && p.x >= 0.0
+            && p.y >= 0.0
+            && p.x < pw as f64
+            && p.y < ph as f64
+        {
+            // NOTE: the held point is on the surface drawn over it; the pins' tolerance lets
+            // only a real fold in front hide it.
+            let (px, py) = (p.x as usize, p.y as usize);
+            let tol = PIN_DEPTH_TOLERANCE * content.diagonal();
+            let key_tol = if camera.is_perspective() {
+                tol * p.depth * p.depth
+            } else {
+                tol
+            };
+            if p.depth <= self.depth[py * pw + px] + key_tol
+                && let Some(cell) = frame.get_mut(px / sx, py / sy)
+            {
+                *cell = Cell {
+                    glyph: HAND_GLYPH,
+                    fg: options.color.then_some(HAND_COLOUR),
+                    bg: None,
+                };
+            }
+        }
         if options.legend {
             draw_legend(frame, view);
         }
         Ok(())
+    }
+
+    /// The camera of the last frame drawn.
+    #[must_use]
+    pub fn camera(&self) -> Option<&Camera> {
+        self.last.as_ref().map(|(c, _, _)| c)
+    }
+
+    /// The point of the cloth seen at cell `(column, row)` of the last frame drawn, m: of the
+    /// cloth's pixels in the cell, the nearest to the viewer (so what is in front is what is
+    /// picked), or, when the cell shows no cloth, of the cells around it (a cursor is a cell
+    /// wide, a thin strand of cloth may miss its centre). `None` when no cloth is there or
+    /// nothing was drawn.
+    #[must_use]
+    pub fn surface_at(&self, column: usize, row: usize) -> Option<Vec3> {
+        let &(ref camera, (sx, sy), pw) = self.last.as_ref()?;
+        let ph = self.depth.len().checked_div(pw)?;
+        let nearest_in = |cx: usize, cy: usize| -> Option<(f64, usize, usize)> {
+            let mut best: Option<(f64, usize, usize)> = None;
+            for py in cy * sy..((cy + 1) * sy).min(ph) {
+                for px in cx * sx..((cx + 1) * sx).min(pw) {
+                    let i = py * pw + px;
+                    if matches!(self.material[i], Material::Front | Material::Back)
+                        && best.is_none_or(|(d, _, _)| self.depth[i] < d)
+                    {
+                        best = Some((self.depth[i], px, py));
+                    }
+                }
+            }
+            best
+        };
+        let hit = nearest_in(column, row).or_else(|| {
+            let mut around = None;
+            for (dx, dy) in [
+                (-1, 0),
+                (1, 0),
+                (0, -1),
+                (0, 1),
+                (-1, -1),
+                (1, -1),
+                (-1, 1),
+                (1, 1),
+            ] {
+                let (Some(cx), Some(cy)) =
+                    (column.checked_add_signed(dx), row.checked_add_signed(dy))
+                else {
+                    continue;
+                };
+                if let Some(h) = nearest_in(cx, cy)
+                    && around.is_none_or(|(d, _, _)| h.0 < d)
+                {
+                    around = Some(h);
+                }
+            }
+            around
+        })?;
+        let (depth, px, py) = hit;
+        Some(camera.unproject(px as f64 + 0.5, py as f64 + 0.5, depth))
     }
 }
 
@@ -305,6 +394,8 @@ fn stretch(face: Material, material: &[Material], shade: &mut [f32]) -> Option<(
 
 /// Colour of a pin marker.
 const PIN_COLOUR: Rgb = Rgb(255, 70, 70);
+/// The held point's colour: apart from the pins' red and the cloth's shades.
+const HAND_COLOUR: Rgb = Rgb(255, 220, 40);
 
 /// What decides which face of the cloth a triangle shows.
 struct Faces<'a> {
@@ -994,5 +1085,104 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The nearest point of `positions` to `at`.
+    fn nearest(positions: &[Vec3], at: Vec3) -> usize {
+        (0..positions.len())
+            .min_by(|&a, &b| {
+                (positions[a] - at)
+                    .norm()
+                    .total_cmp(&(positions[b] - at).norm())
+            })
+            .unwrap()
+    }
+
+    #[test]
+    fn every_camera_unprojects_what_it_projects() {
+        let (mesh, _) = flat_cloth();
+        let content = Bounds {
+            min: Vec3::zeros(),
+            max: Vec3::new(1.0, 1.0, 1.0),
+        };
+        for view in [
+            View::Side,
+            View::Top,
+            View::Front,
+            View::Bottom,
+            View::Orbit,
+        ] {
+            let camera = Camera::new(&ViewSpec::new(view, &mesh), &content, 80, 40, 2.0).unwrap();
+            for p in [
+                Vec3::new(0.3, 0.9, 0.2),
+                Vec3::new(0.5, 0.5, 0.5),
+                Vec3::new(1.0, 0.1, 0.8),
+            ] {
+                let q = camera.project(p).unwrap();
+                let back = camera.unproject(q.x, q.y, q.depth);
+                assert!((back - p).norm() < 1e-12, "{view}: {p} came back as {back}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_surface_under_a_cell_is_the_layer_in_front() {
+        // pinned4's grid with its right half folded over its left, 5 cm above it.
+        let mesh = ClothMesh::pinned_grid(50).unwrap();
+        let mut state = ClothState::new(&mesh);
+        for p in &mut state.positions {
+            if p.x > 0.5 {
+                *p = Vec3::new(1.0 - p.x, 1.05, p.z);
+            }
+        }
+        let options = RenderOptions::default();
+        let size = FrameSize::new(60, 30).unwrap();
+        for (view, upper) in [(View::Top, true), (View::Bottom, false)] {
+            let mut frame = AsciiFrame::new(size);
+            let mut r = Renderer::new();
+            let spec = ViewSpec::new(view, &mesh);
+            r.render(&mesh, &state, &[], &spec, &options, &mut frame)
+                .unwrap();
+            let camera = *r.camera().unwrap();
+            // The cell over the point (0.25, z = 0.5) of the left half.
+            let q = camera.project(Vec3::new(0.25, 1.0, 0.5)).unwrap();
+            let (sx, sy) = options.mode.pixels_per_cell();
+            let (col, row) = (q.x as usize / sx, q.y as usize / sy);
+            let at = r.surface_at(col, row).unwrap();
+            let expected_y = if upper { 1.05 } else { 1.0 };
+            assert!((at.y - expected_y).abs() < 1e-9, "{view}: {at}");
+            let picked = nearest(&state.positions, at);
+            let column = picked % mesh.nw();
+            assert_eq!(column > 24, upper, "{view}: picked column {column}");
+            // Off the cloth: nothing.
+            assert_eq!(r.surface_at(0, 0), None, "{view}");
+        }
+    }
+
+    #[test]
+    fn a_sphere_in_front_hides_the_cloth_from_the_hand_and_the_held_point_is_marked() {
+        let (mesh, state) = flat_cloth();
+        let centre = state.positions[mesh.index(5, 5)];
+        let hand = RenderOptions {
+            hand: Some(centre),
+            ..RenderOptions::default()
+        };
+        let frame = draw(&mesh, &state, &[], View::Top, &hand);
+        assert_eq!(glyphs(&frame).matches(HAND_GLYPH).count(), 1);
+        // A ball above the centre, seen from above, covers it.
+        let ball = Collider::Sphere(Sphere {
+            origin: centre + Vec3::new(0.0, 0.3, 0.0),
+            radius: 0.2,
+            friction: 0.0,
+        });
+        let frame = draw(&mesh, &state, &[ball], View::Top, &hand);
+        assert_eq!(glyphs(&frame).matches(HAND_GLYPH).count(), 0);
+        let mut r = Renderer::new();
+        let mut frame = AsciiFrame::new(FrameSize::new(40, 20).unwrap());
+        let spec = ViewSpec::new(View::Top, &mesh);
+        r.render(&mesh, &state, &[ball], &spec, &hand, &mut frame)
+            .unwrap();
+        let q = r.camera().unwrap().project(centre).unwrap();
+        assert_eq!(r.surface_at(q.x as usize, q.y as usize), None);
     }
 }
