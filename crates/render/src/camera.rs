@@ -563,6 +563,13 @@ impl Camera {
         self.up
     }
 
+    /// Where a perspective camera's eye is (`None` for orthographic: it sees along
+    /// [`Self::forward`] from everywhere).
+    #[must_use]
+    pub fn eye(&self) -> Option<Vec3> {
+        self.is_perspective().then_some(self.origin)
+    }
+
     /// Whether this is a perspective camera.
     #[must_use]
     pub fn is_perspective(&self) -> bool {

@@ -86,6 +86,13 @@ struct Cloth {
     new_rows: Vec<crate::export::StatsRow>,
     peak_kinetic: f64,
     fault: Option<crate::Fault>,
+    /// The scene, when a hand's pin or cut (or a reset after one) changed it since the last
+    /// snapshot: the mirror draws the mesh the thread steps.
+    scene: Option<std::sync::Arc<cloth_scene::Scene>>,
+    /// The touches applied since the start or the last reset, when they changed.
+    touched: Option<Vec<crate::Timed>>,
+    /// The point the hand holds.
+    held: Option<crate::Held>,
 }
 
 impl Cloth {
@@ -100,6 +107,13 @@ impl Cloth {
         mirror.record.append(&mut self.new_rows);
         mirror.peak_kinetic = self.peak_kinetic;
         mirror.fault.clone_from(&self.fault);
+        if let Some(scene) = self.scene.take() {
+            mirror.scene = scene;
+        }
+        if let Some(touched) = self.touched.take() {
+            mirror.touched = touched;
+        }
+        mirror.held = self.held;
     }
 }
 
@@ -110,6 +124,10 @@ struct Publisher {
     spare: Vec<cloth_solver::Vec3>,
     /// The record's generation and length at the last snapshot.
     published: (u64, usize),
+    /// The scene at the last snapshot.
+    scene: Option<std::sync::Arc<cloth_scene::Scene>>,
+    /// The generation and number of touches at the last snapshot.
+    touched: (u64, usize),
 }
 
 impl Publisher {
@@ -140,6 +158,22 @@ impl Publisher {
         self.published.1 = sim.record.len();
         p.peak_kinetic = sim.peak_kinetic;
         p.fault.clone_from(&sim.fault);
+        p.held = sim.held;
+        // NOTE: the scene and the touches travel only when they changed, and stay in the
+        // snapshot until adopted (a snapshot not taken is filled again over them).
+        if self
+            .scene
+            .as_ref()
+            .is_none_or(|s| !std::sync::Arc::ptr_eq(s, &sim.scene))
+        {
+            self.scene = Some(std::sync::Arc::clone(&sim.scene));
+            p.scene = Some(std::sync::Arc::clone(&sim.scene));
+        }
+        let touched = (sim.generation, sim.touched.len());
+        if touched != self.touched {
+            self.touched = touched;
+            p.touched = Some(sim.touched.clone());
+        }
     }
 }
 

@@ -9,7 +9,7 @@ use ratatui::crossterm::event::{
 };
 
 use super::keymap;
-use super::message::Message;
+use super::message::{Button, Message};
 use super::model::{App, Overlay, Then};
 
 /// The message for a terminal event, if it means anything now.
@@ -111,10 +111,20 @@ fn key(app: &App, k: &KeyEvent) -> Option<Message> {
 
 fn mouse(m: MouseEvent) -> Option<Message> {
     let (col, row) = (m.column, m.row);
+    let button = |b: MouseButton| match b {
+        MouseButton::Left => Button::Left,
+        MouseButton::Middle => Button::Middle,
+        MouseButton::Right => Button::Right,
+    };
     match m.kind {
-        MouseEventKind::Down(MouseButton::Left) => Some(Message::MouseDown { col, row }),
-        MouseEventKind::Drag(MouseButton::Left) => Some(Message::MouseDrag { col, row }),
-        MouseEventKind::Up(MouseButton::Left) => Some(Message::MouseUp),
+        MouseEventKind::Down(b) => Some(Message::MouseDown {
+            col,
+            row,
+            button: button(b),
+            ctrl: m.modifiers.contains(KeyModifiers::CONTROL),
+        }),
+        MouseEventKind::Drag(_) => Some(Message::MouseDrag { col, row }),
+        MouseEventKind::Up(_) => Some(Message::MouseUp),
         MouseEventKind::ScrollUp => Some(Message::Wheel { col, row, dir: -1 }),
         MouseEventKind::ScrollDown => Some(Message::Wheel { col, row, dir: 1 }),
         _ => None,

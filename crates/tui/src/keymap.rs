@@ -90,14 +90,17 @@ pub enum Group {
     Parameters,
     /// Panes and cameras.
     Views,
+    /// Touching the cloth: grab, pin, cut, poke.
+    Hands,
     /// Scenes, help, quitting.
     General,
 }
 
 impl Group {
     /// Every group, in help order.
-    pub const ALL: [Group; 4] = [
+    pub const ALL: [Group; 5] = [
         Group::Simulation,
+        Group::Hands,
         Group::Parameters,
         Group::Views,
         Group::General,
@@ -109,6 +112,7 @@ impl Group {
             Group::Simulation => "Simulation",
             Group::Parameters => "Parameters",
             Group::Views => "Views",
+            Group::Hands => "Touching the cloth",
             Group::General => "General",
         }
     }
@@ -198,6 +202,27 @@ pub const KEYMAP: &[Binding] = &[
         footer: Some(("+/-", "speed")),
         group: Group::Simulation,
         message: Message::Slower,
+    },
+    Binding {
+        keys: &[ch('t')],
+        help: "poke the cloth at the focused pane's centre",
+        footer: Some(("t", "poke")),
+        group: Group::Hands,
+        message: Message::Poke,
+    },
+    Binding {
+        keys: &[ch('P')],
+        help: "pin / unpin the point under the mouse",
+        footer: Some(("P", "pin")),
+        group: Group::Hands,
+        message: Message::Pin,
+    },
+    Binding {
+        keys: &[ch('A')],
+        help: "write the touches since r as an actions file",
+        footer: None,
+        group: Group::Hands,
+        message: Message::WriteActions,
     },
     Binding {
         keys: &[key(KeyCode::Up), ch('k')],
@@ -421,6 +446,13 @@ pub const KEYMAP: &[Binding] = &[
     },
 ];
 
+/// What the mouse does (with the mouse captured), for the help's "Touching the cloth".
+pub const MOUSE: &[(&str, &str)] = &[
+    ("drag", "carry a point of the cloth (off it: orbit)"),
+    ("C-click", "pin / unpin the point (or the middle button)"),
+    ("R-drag", "cut the springs the stroke crosses (right)"),
+];
+
 /// The message bound to `ev` on the main screen.
 pub fn lookup(ev: &KeyEvent) -> Option<Message> {
     KEYMAP
@@ -445,6 +477,10 @@ mod tests {
         for b in KEYMAP {
             assert!(b.help.chars().count() <= 46, "{:?} is too long", b.help);
             assert!(keys_label(b).chars().count() <= 7, "{:?}", keys_label(b));
+        }
+        for (keys, help) in MOUSE {
+            assert!(help.chars().count() <= 46, "{help:?} is too long");
+            assert!(keys.chars().count() <= 7, "{keys:?}");
         }
     }
 

@@ -13,6 +13,7 @@
 
 mod compare;
 mod decode;
+mod hand;
 mod input;
 mod keymap;
 mod layout;

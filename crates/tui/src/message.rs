@@ -1,5 +1,16 @@
 //! Everything that can happen to the app, as data.
 
+/// A mouse button.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Button {
+    /// The left (first) button: grab, or turn the orbit off the cloth.
+    Left,
+    /// The middle button: pin or unpin.
+    Middle,
+    /// The right button: cut.
+    Right,
+}
+
 /// One thing that happened: a key's meaning, a mouse gesture, a resize, time passing.
 ///
 /// Keys become messages in one place (`input`); [`super::update()`] is the only code
@@ -104,8 +115,12 @@ pub enum Message {
         col: u16,
         /// Row.
         row: u16,
+        /// Which button.
+        button: Button,
+        /// Whether Control was held.
+        ctrl: bool,
     },
-    /// The mouse moved with the button down.
+    /// The mouse moved with a button down.
     MouseDrag {
         /// Column.
         col: u16,
@@ -114,6 +129,12 @@ pub enum Message {
     },
     /// The button went up.
     MouseUp,
+    /// Poke the cloth at the focused pane's centre (the hand without a mouse).
+    Poke,
+    /// Pin or unpin the point under the mouse (or at the focused pane's centre).
+    Pin,
+    /// Write the touches since the start or the last reset as an actions file.
+    WriteActions,
     /// The wheel turned over a cell (+1 = towards the user = zoom out).
     Wheel {
         /// Column.

@@ -256,6 +256,12 @@ pub struct App {
     pub display: Option<super::panes::Display>,
     /// Last mouse position while dragging in an orbit pane.
     pub drag: Option<(u16, u16)>,
+    /// What the mouse's hand holds while a button is down (a point, a knife).
+    pub grip: Option<super::hand::Grip>,
+    /// Where the mouse was last seen (a button went down or dragged there).
+    pub pointer: Option<(u16, u16)>,
+    /// The panes as last drawn (filled by `panes::prepare`): what a gesture picks from.
+    pub drawn: Vec<super::hand::Drawn>,
     /// Set by quit.
     pub quit: bool,
     /// What a save asked for from the quit or open dialog goes on to once the file is written.
@@ -330,6 +336,9 @@ impl App {
             display,
             renderer: Renderer::new(),
             drag: None,
+            grip: None,
+            pointer: None,
+            drawn: Vec::new(),
             quit: false,
             after_save: None,
             cwd: PathBuf::from("."),

@@ -16,6 +16,7 @@ use ratatui::widgets::Widget;
 
 use cloth_mesh::{ClothMesh, ClothState, GridSpec};
 
+use super::hand::Drawn;
 use super::layout::{self, inner};
 use super::model::{App, Level};
 
@@ -99,12 +100,21 @@ impl Display {
 /// orbit camera is refitted to it for the pane it is drawn in, so it moves only when the
 /// region grows.
 pub fn prepare(app: &mut App, area: Rect) {
+    app.drawn.clear();
     let Some(regions) = layout::regions(app, area) else {
         return;
     };
     if app.compare.is_some() {
         prepare_compare(app, &regions.variants);
         return;
+    }
+    if app
+        .display
+        .as_ref()
+        .is_some_and(|d| !d.draws(&app.sim.scene.mesh))
+    {
+        // A pin by hand changed the grid's pins.
+        app.display = Display::for_mesh(&app.sim.scene.mesh);
     }
     if let Some(d) = &mut app.display {
         d.update(&app.sim.state.positions);
@@ -122,6 +132,7 @@ pub fn prepare(app: &mut App, area: Rect) {
     let options = RenderOptions {
         mode: app.mode,
         color: app.color,
+        hand: held_at(sim),
         ..RenderOptions::default()
     };
     let mut errors = Vec::new();
@@ -152,6 +163,11 @@ pub fn prepare(app: &mut App, area: Rect) {
             app.frames[slot] = None;
             errors.push(format!("cannot draw pane {}: {e}", slot + 1));
         }
+        app.drawn.push(Drawn {
+            inner: inside,
+            variant: 0,
+            spec,
+        });
     }
     for e in errors {
         app.say(Level::Error, e);
@@ -169,6 +185,7 @@ fn prepare_compare(app: &mut App, rects: &[Rect]) {
         display,
         renderer,
         extent,
+        drawn,
         ..
     } = app;
     let Some(c) = compare else {
@@ -219,16 +236,31 @@ fn prepare_compare(app: &mut App, rects: &[Rect]) {
         if frame.size() != size {
             frame.resize(size);
         }
+        let options = RenderOptions {
+            hand: held_at(sim),
+            ..options
+        };
         if let Err(e) =
             renderer.render(mesh, state, &sim.settings.colliders, &spec, &options, frame)
         {
             *slot = None;
             errors.push(format!("cannot draw variant {}: {e}", i + 1));
         }
+        drawn.push(Drawn {
+            inner: inside,
+            variant: i,
+            spec,
+        });
     }
     for e in errors {
         app.say(Level::Error, e);
     }
+}
+
+/// Where the point a hand holds is, to mark it.
+fn held_at(sim: &cloth_run::Run) -> Option<cloth_solver::Vec3> {
+    sim.held
+        .and_then(|h| sim.state.positions.get(h.point).copied())
 }
 
 /// Draws an [`AsciiFrame`] into a ratatui buffer, cell for cell, with its colours at `depth`

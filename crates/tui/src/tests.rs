@@ -15,6 +15,7 @@ use super::model::{Overlay, Then};
 use super::params::PARAMS;
 use super::{App, Args, Message, build_in, input, panes, update, view};
 
+mod hands;
 mod keys;
 
 fn app_with(scene: &str, paused: bool) -> App {
@@ -116,6 +117,16 @@ fn select(app: &mut App, label: &str) {
         .unwrap_or_else(|| panic!("no row {label}"));
     while app.selected != at {
         press(app, KeyCode::Down);
+    }
+}
+
+/// The left mouse button going down at a cell, without Control.
+fn left_down(col: u16, row: u16) -> Message {
+    Message::MouseDown {
+        col,
+        row,
+        button: super::message::Button::Left,
+        ctrl: false,
     }
 }
 
@@ -747,7 +758,7 @@ fn dragging_in_an_orbit_pane_turns_the_camera_and_the_wheel_zooms() {
     let (yaw, distance) = (app.orbit.yaw, app.orbit.distance);
     // Pane 2 is the right half of the view area (left of the 40-column panel).
     let (col, row) = (60, 10);
-    update(&mut app, Message::MouseDown { col, row });
+    update(&mut app, left_down(col, row));
     update(&mut app, Message::MouseDrag { col: col + 10, row });
     update(&mut app, Message::MouseUp);
     // 10 cells at 0.05 rad per cell.
@@ -755,7 +766,7 @@ fn dragging_in_an_orbit_pane_turns_the_camera_and_the_wheel_zooms() {
     update(&mut app, Message::Wheel { col, row, dir: -1 });
     assert!((app.orbit.distance - distance * super::keymap::ZOOM).abs() < 1e-12);
     // The same gesture over a fixed view (pane 1) does nothing to the camera.
-    update(&mut app, Message::MouseDown { col: 5, row });
+    update(&mut app, left_down(5, row));
     update(&mut app, Message::MouseDrag { col: 15, row });
     assert!((app.orbit.yaw - (yaw + 0.5)).abs() < 1e-12);
 }

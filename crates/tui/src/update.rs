@@ -5,8 +5,9 @@ use std::path::PathBuf;
 use cloth_render::{Mode, Orbit, View};
 use ratatui::layout::{Position, Rect};
 
+use super::hand;
 use super::layout;
-use super::message::Message;
+use super::message::{Button, Message};
 use super::model::{App, Layout, Level, Overlay, Picker, Prompt, Purpose, RATES, Then};
 use super::params::{Kind, is_option_row, row, row_count};
 use cloth_run::output;
@@ -261,10 +262,25 @@ pub fn update(app: &mut App, msg: Message) {
         Message::Answer(yes) => answer(app, yes),
         Message::MouseDown { .. } | Message::MouseDrag { .. } | Message::Wheel { .. }
             if !app.mouse => {}
-        Message::MouseDown { col, row } => {
-            app.drag = orbit_pane_at(app, col, row).map(|_| (col, row));
+        Message::MouseDown {
+            col,
+            row,
+            button,
+            ctrl,
+        } => {
+            app.pointer = Some((col, row));
+            app.drag = None;
+            // NOTE: the left button on the cloth takes a point; off it, in an orbit pane, it
+            // turns the camera as before.
+            if !hand::press(app, col, row, button, ctrl) && button == Button::Left && !ctrl {
+                app.drag = orbit_pane_at(app, col, row).map(|_| (col, row));
+            }
         }
         Message::MouseDrag { col, row } => {
+            app.pointer = Some((col, row));
+            if hand::drag(app, col, row) {
+                return;
+            }
             if let Some((c0, r0)) = app.drag {
                 let dx = f64::from(col) - f64::from(c0);
                 let dy = f64::from(row) - f64::from(r0);
@@ -272,7 +288,13 @@ pub fn update(app: &mut App, msg: Message) {
                 app.drag = Some((col, row));
             }
         }
-        Message::MouseUp => app.drag = None,
+        Message::MouseUp => {
+            app.drag = None;
+            hand::release(app);
+        }
+        Message::Poke => hand::poke(app),
+        Message::Pin => hand::pin_here(app),
+        Message::WriteActions => hand::write_actions(app),
         Message::Wheel { col, row, dir } => {
             if orbit_pane_at(app, col, row).is_some() {
                 zoom(
@@ -559,6 +581,7 @@ fn reset(app: &mut App) {
         }
     }
     app.sim.reset();
+    app.grip = None;
     app.debt = 0.0;
     app.extent = None;
     if app.overlay == Overlay::Fault {
@@ -566,7 +589,7 @@ fn reset(app: &mut App) {
     }
     app.say(
         Level::Info,
-        "reset to the start positions (parameters kept)",
+        "reset to the start positions and the scene's pins (parameters kept)",
     );
 }
 

@@ -7,7 +7,7 @@ use ratatui::layout::{Alignment, Rect};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Clear, Paragraph, Wrap};
 
-use crate::keymap::{Group, KEYMAP, keys_label};
+use crate::keymap::{Group, KEYMAP, MOUSE, keys_label};
 use crate::layout::{MIN_HEIGHT, MIN_WIDTH};
 use crate::model::{App, Picker, Prompt, Purpose, Then};
 use crate::params::{Kind, fmt_number, is_option_row, row, row_count};
@@ -57,15 +57,22 @@ fn help_text(area: Rect, theme: &Theme) -> HelpText {
     let key_w = KEYMAP
         .iter()
         .map(|b| keys_label(b).chars().count())
+        .chain(MOUSE.iter().map(|(k, _)| k.chars().count()))
         .max()
         .unwrap_or(8);
+    let row = |keys: &str, help: &'static str| {
+        Line::from(vec![
+            Span::styled(format!("  {keys:<key_w$}  "), theme.key),
+            Span::styled(help, theme.text),
+        ])
+    };
     let group_lines = |g: Group| -> Vec<Line<'static>> {
         let mut v = vec![Line::styled(g.title().to_owned(), theme.warn)];
+        if g == Group::Hands {
+            v.extend(MOUSE.iter().map(|&(k, help)| row(k, help)));
+        }
         for b in KEYMAP.iter().filter(|b| b.group == g) {
-            v.push(Line::from(vec![
-                Span::styled(format!("  {:<key_w$}  ", keys_label(b)), theme.key),
-                Span::styled(b.help, theme.text),
-            ]));
+            v.push(row(&keys_label(b), b.help));
         }
         v
     };
