@@ -6,193 +6,20 @@
 //! where `.ci/run` installs tmux and its absence is a failure. Every wait polls with a
 //! generous deadline, so a loaded two-core machine slows the tests down without failing them.
 
-use std::process::{Command, Output};
+mod support;
+
+use std::process::Command;
 use std::thread::sleep;
 use std::time::{Duration, Instant};
 
 use cloth_render::{FRONT_RAMP, PIN_GLYPH};
-
-/// Seconds to wait for the UI to come up (a debug binary on a busy machine).
-const START: u64 = 60;
-/// Seconds to wait for an answer to a key or a signal.
-const ANSWER: u64 = 15;
-
-/// What tmux reports of the terminal while the UI runs: alternate screen on, cursor hidden,
-/// presses and drags reported, and not every motion of the pointer (mode 1003 would send a
-/// report for each cell crossed).
-const UI_MODES: &str = "1 0 1 0";
-/// ... and what a shell expects: alternate screen off, cursor shown, no mouse tracking.
-const SHELL_MODES: &str = "0 1 0 0";
-
-/// A private tmux server (its own socket) with one pane running `sh`, killed when the test
-/// ends however it ends.
-struct Tmux {
-    socket: String,
-    dir: tempfile::TempDir,
-}
+use support::{ANSWER, SHELL_MODES, START, Tmux, UI_MODES};
 
 impl Tmux {
-    /// A new server, or `None` when tmux is not installed (a failure under CI).
+    /// A new server running `clothsim` (see [`Tmux::open`]).
     fn start(name: &str, width: u16, height: u16) -> Option<Self> {
-        if !tmux_available() {
-            let ci = std::env::var("CI").is_ok_and(|v| v == "true");
-            assert!(!ci, "tmux is required under CI (.ci/run installs it)");
-            eprintln!("NOTICE: tmux is not installed; skipping the end-to-end test {name}");
-            return None;
-        }
-        let t = Tmux {
-            socket: format!("clothsim-e2e-{}-{name}", std::process::id()),
-            dir: tempfile::tempdir().expect("a temporary folder"),
-        };
-        let (w, h) = (width.to_string(), height.to_string());
-        let started = t.run(&[
-            "-f",
-            "/dev/null",
-            "new-session",
-            "-d",
-            "-s",
-            "e2e",
-            "-x",
-            &w,
-            "-y",
-            &h,
-            "sh",
-        ]);
-        assert!(started.status.success(), "{started:?}");
-        // A known shell, so its prompt and echo are predictable.
-        t.keys(&["PS1='$ '; stty sane", "Enter"]);
-        t.keys(&[&format!("cd '{}'", t.dir.path().display()), "Enter"]);
-        Some(t)
+        Self::open(env!("CARGO_BIN_EXE_clothsim"), name, width, height)
     }
-
-    fn run(&self, args: &[&str]) -> Output {
-        Command::new("tmux")
-            .arg("-L")
-            .arg(&self.socket)
-            .args(args)
-            .output()
-            .expect("tmux runs")
-    }
-
-    fn screen(&self) -> String {
-        let o = self.run(&["capture-pane", "-p", "-t", "e2e"]);
-        String::from_utf8_lossy(&o.stdout).into_owned()
-    }
-
-    /// The terminal's modes as tmux sees them: `alternate_on cursor_flag mouse_button_flag
-    /// mouse_all_flag` (1003: every motion).
-    fn modes(&self) -> String {
-        let o = self.run(&[
-            "display",
-            "-p",
-            "-t",
-            "e2e",
-            "#{alternate_on} #{cursor_flag} #{mouse_button_flag} #{mouse_all_flag}",
-        ]);
-        String::from_utf8_lossy(&o.stdout).trim().to_owned()
-    }
-
-    fn keys(&self, keys: &[&str]) {
-        let mut args = vec!["send-keys", "-t", "e2e"];
-        args.extend_from_slice(keys);
-        assert!(self.run(&args).status.success());
-    }
-
-    /// Sends `text` as typed characters (no key names).
-    fn literal(&self, text: &str) {
-        assert!(
-            self.run(&["send-keys", "-t", "e2e", "-l", text])
-                .status
-                .success()
-        );
-    }
-
-    /// Waits until `ok` holds of the screen, or fails after `secs` with the screen shown.
-    fn wait_for(&self, what: &str, secs: u64, ok: impl Fn(&str) -> bool) -> String {
-        let start = Instant::now();
-        loop {
-            let s = self.screen();
-            if ok(&s) {
-                return s;
-            }
-            assert!(
-                start.elapsed() < Duration::from_secs(secs),
-                "timed out waiting for {what}; the screen:\n{s}"
-            );
-            sleep(Duration::from_millis(50));
-        }
-    }
-
-    /// Waits until the terminal's modes are `want`.
-    fn wait_modes(&self, what: &str, want: &str) {
-        let start = Instant::now();
-        loop {
-            let m = self.modes();
-            if m == want {
-                return;
-            }
-            assert!(
-                start.elapsed() < Duration::from_secs(ANSWER),
-                "timed out waiting for {what}: modes {m:?}, want {want:?}; the screen:\n{}",
-                self.screen()
-            );
-            sleep(Duration::from_millis(50));
-        }
-    }
-
-    /// Starts clothsim with `args` in the pane, its pid written to a file, and the exit
-    /// status echoed when it ends; waits for the UI.
-    fn clothsim(&self, args: &str) -> u32 {
-        self.clothsim_with("", args)
-    }
-
-    /// As [`Self::clothsim`], with environment assignments `env` (`NAME=VALUE ...`).
-    fn clothsim_with(&self, env: &str, args: &str) -> u32 {
-        let bin = env!("CARGO_BIN_EXE_clothsim");
-        self.keys(&["clear", "Enter"]);
-        self.keys(&[
-            &format!("sh -c 'echo $$ > pid; exec env {env} \"{bin}\" {args}'; echo \"exit=$?\""),
-            "Enter",
-        ]);
-        self.wait_for("the UI", START, |s| s.contains("parameters"));
-        self.wait_modes("the UI's terminal modes", UI_MODES);
-        self.pid()
-    }
-
-    fn pid(&self) -> u32 {
-        let path = self.dir.path().join("pid");
-        std::fs::read_to_string(&path)
-            .ok()
-            .and_then(|s| s.trim().parse().ok())
-            .unwrap_or_else(|| panic!("no pid in {}", path.display()))
-    }
-
-    /// Asserts the shell's terminal is back in canonical (cooked) mode with echo.
-    fn assert_cooked(&self) {
-        self.keys(&[
-            r"stty -a | tr ' ;' '\n\n' | grep -x -- '-*icanon\|-*echo' | sed 's/^/mode:/'; echo done.",
-            "Enter",
-        ]);
-        let s = self.wait_for("stty", ANSWER, |s| s.lines().any(|l| l.trim() == "done."));
-        assert!(
-            s.contains("mode:icanon") && s.contains("mode:echo"),
-            "the terminal is back in canonical mode with echo:\n{s}"
-        );
-        assert!(!s.contains("mode:-"), "{s}");
-    }
-}
-
-impl Drop for Tmux {
-    fn drop(&mut self) {
-        let _ = self.run(&["kill-server"]);
-    }
-}
-
-fn tmux_available() -> bool {
-    Command::new("tmux")
-        .arg("-V")
-        .output()
-        .is_ok_and(|o| o.status.success())
 }
 
 fn kill(signal: &str, pid: u32) {
@@ -598,4 +425,23 @@ fn simulate_without_out_on_a_terminal_prints_a_summary_and_piped_prints_the_json
         s.lines().any(|l| l.starts_with("done="))
     });
     assert!(s.contains("{\"num_width_points\""), "{s}");
+}
+
+#[test]
+fn the_mouse_grabs_drags_and_lets_go_a_point_of_pinned4() {
+    let Some(t) = Tmux::start("hand-verlet", 100, 30) else {
+        return;
+    };
+    support::hands::a_point_is_grabbed_dragged_and_let_go(&t, "tui pinned4 --paused");
+}
+
+#[test]
+fn the_mouse_grabs_drags_and_lets_go_a_point_under_fast_implicit() {
+    let Some(t) = Tmux::start("hand-fast-implicit", 100, 30) else {
+        return;
+    };
+    support::hands::a_point_is_grabbed_dragged_and_let_go(
+        &t,
+        "tui pinned4 --paused --solver fast-implicit",
+    );
 }
