@@ -1115,3 +1115,59 @@ fn an_actions_script_grabs_holds_and_releases_a_point_the_same_way_every_time() 
         stderr(&o)
     );
 }
+
+#[test]
+fn a_cut_by_script_parts_pinned4_in_render_and_in_the_exported_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("cut.jsonl");
+    // A stroke down the middle of the flat cloth, seen from above.
+    std::fs::write(
+        &script,
+        "{\"frame\": 0, \"action\": \"cut\", \"from\": [0.5, 2, -0.5], \"to\": [0.5, 2, 1.5], \
+         \"along\": [0, -1, 0]}\n",
+    )
+    .unwrap();
+    let script = script.to_str().unwrap();
+    let o = clothsim(&[
+        "render", "pinned4", "--actions", script, "--frames", "60", "--every", "60", "--view",
+        "top", "--size", "60x20", "--color", "never",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).is_empty(), "no warning for a cut cloth: {}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    let last = text.rsplit('\x0c').next().unwrap().trim_start_matches('\n');
+    insta::assert_snapshot!("pinned4_cut_down_the_middle_top_view_after_60_frames", last);
+    // Every row of the frame that shows cloth has a gap between its two halves.
+    for line in last.lines() {
+        let cloth: Vec<usize> = line
+            .char_indices()
+            .filter(|(_, c)| *c != ' ')
+            .map(|(i, _)| i)
+            .collect();
+        if let (Some(&a), Some(&b)) = (cloth.first(), cloth.last()) {
+            assert!(
+                (a..b).any(|i| line.as_bytes()[i] == b' '),
+                "no gap in {line:?}"
+            );
+        }
+    }
+    // The OBJ of the cut cloth has fewer faces than the whole one: 2 x 49 triangles go.
+    let obj = dir.path().join("cut.obj");
+    let o = clothsim(&[
+        "simulate",
+        "pinned4",
+        "--actions",
+        script,
+        "--frames",
+        "2",
+        "--out",
+        obj.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let faces = std::fs::read_to_string(&obj)
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("f "))
+        .count();
+    assert_eq!(faces, 2 * 49 * 49 - 2 * 49);
+}
