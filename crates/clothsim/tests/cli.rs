@@ -1129,11 +1129,27 @@ fn a_cut_by_script_parts_pinned4_in_render_and_in_the_exported_mesh() {
     .unwrap();
     let script = script.to_str().unwrap();
     let o = clothsim(&[
-        "render", "pinned4", "--actions", script, "--frames", "60", "--every", "60", "--view",
-        "top", "--size", "60x20", "--color", "never",
+        "render",
+        "pinned4",
+        "--actions",
+        script,
+        "--frames",
+        "60",
+        "--every",
+        "60",
+        "--view",
+        "top",
+        "--size",
+        "60x20",
+        "--color",
+        "never",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).is_empty(), "no warning for a cut cloth: {}", stderr(&o));
+    assert!(
+        stderr(&o).is_empty(),
+        "no warning for a cut cloth: {}",
+        stderr(&o)
+    );
     let text = String::from_utf8(o.stdout).unwrap();
     let last = text.rsplit('\x0c').next().unwrap().trim_start_matches('\n');
     insta::assert_snapshot!("pinned4_cut_down_the_middle_top_view_after_60_frames", last);

@@ -268,7 +268,7 @@ pub fn build_compare_in(
         Some(first.choice.entry.name()),
     )?;
     start(&mut app.sim)?;
-    app.saved = (app.sim.settings.clone(), app.sim.entry().name());
+    app.mark_saved();
     app.sent = app.saved.clone();
     let solver_varied = args.vary.iter().any(|a| a.key == "simulation.solver");
     let mut members = Vec::new();

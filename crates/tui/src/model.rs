@@ -274,6 +274,8 @@ pub struct App {
     pub undo: Vec<(Settings, &'static str)>,
     /// The settings and solver last opened or saved: edits past them are unsaved.
     pub saved: (Settings, &'static str),
+    /// The pins last opened or saved (see [`pins`]): a pin set or lifted by hand is unsaved.
+    pub saved_pins: Vec<(usize, usize)>,
     /// Say where the cloth is once the single frame asked for arrives.
     pub step_note: bool,
     /// A scene waiting for the answer to "this cloth is big: open it?".
@@ -299,8 +301,10 @@ impl App {
     pub fn new(sim: Run, running: bool) -> Self {
         let orbit = Orbit::course_default(&sim.scene.mesh);
         let saved = (sim.settings.clone(), sim.entry().name());
+        let saved_pins = pins(&sim);
         let display = super::panes::Display::for_mesh(&sim.scene.mesh);
         Self {
+            saved_pins,
             sent: saved.clone(),
             saved,
             undo: Vec::new(),
@@ -347,9 +351,17 @@ impl App {
         }
     }
 
-    /// Whether the live settings or solver differ from what was last opened or saved.
+    /// Whether the live settings, solver or pins differ from what was last opened or saved.
     pub fn unsaved(&self) -> bool {
-        self.sim.settings != self.saved.0 || self.sim.entry().name() != self.saved.1
+        self.sim.settings != self.saved.0
+            || self.sim.entry().name() != self.saved.1
+            || pins(&self.sim) != self.saved_pins
+    }
+
+    /// Takes what runs now as what was last opened or saved.
+    pub fn mark_saved(&mut self) {
+        self.saved = (self.sim.settings.clone(), self.sim.entry().name());
+        self.saved_pins = pins(&self.sim);
     }
 
     /// Tells the simulation's stepper: the worker (in compare mode the coordinator, for every
@@ -486,4 +498,12 @@ impl App {
             (0..self.layout.panes()).collect()
         }
     }
+}
+
+/// The pinned points of `sim`'s cloth by grid place, in order.
+pub fn pins(sim: &Run) -> Vec<(usize, usize)> {
+    let mut p = sim.scene.mesh.spec().pinned.clone();
+    p.sort_unstable();
+    p.dedup();
+    p
 }

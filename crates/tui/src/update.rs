@@ -1055,7 +1055,7 @@ fn save(app: &mut App, path: &std::path::Path) -> anyhow::Result<()> {
     let mut text = serde_json::to_string_pretty(&file)?;
     text.push('\n');
     let written = output::write_atomic(path, text.as_bytes())?;
-    app.saved = (app.sim.settings.clone(), app.sim.entry().name());
+    app.mark_saved();
     let saved = format!(
         "saved to {} (load it with: clothsim tui {})",
         path.display(),
@@ -1275,10 +1275,10 @@ fn start_scene(app: &mut App, scene: cloth_scene::Scene) {
         Ok(sim) => {
             app.orbit = Orbit::course_default(&sim.scene.mesh);
             app.orbit_fitted = true;
-            app.saved = (sim.settings.clone(), sim.entry().name());
             app.undo.clear();
             app.display = super::panes::Display::for_mesh(&sim.scene.mesh);
             app.sim = sim;
+            app.mark_saved();
             app.selected = app.selected.min(row_count(&app.sim) - 1);
             app.extent = None;
             app.debt = 0.0;

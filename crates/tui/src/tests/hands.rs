@@ -265,3 +265,78 @@ fn snapshot_a_held_point_and_a_cut_cloth() {
     }
     insta::assert_snapshot!("cut_cloth_100x30", screen(&mut app, 100, 30));
 }
+
+#[test]
+fn a_pin_by_hand_is_an_unsaved_edit_until_saved() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    pane(&mut app, View::Top);
+    assert!(!app.unsaved());
+    press(&mut app, KeyCode::Char('P'));
+    assert!(app.unsaved(), "a new pin would be lost on quitting");
+    press(&mut app, KeyCode::Char('q'));
+    assert!(!app.quit, "q asks first");
+    press(&mut app, KeyCode::Esc);
+    press(&mut app, KeyCode::Char('S'));
+    press(&mut app, KeyCode::Enter);
+    assert!(!app.unsaved());
+}
+
+#[test]
+fn the_touches_key_a_writes_replay_headless_to_the_same_bits() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut app = app_with("pinned4", true);
+    app.cwd = dir.path().to_owned();
+    let top = pane(&mut app, View::Top);
+    let (col, row) = middle(&top);
+    step_frame(&mut app);
+    update(&mut app, left_down(col, row));
+    step_frame(&mut app);
+    update(
+        &mut app,
+        Message::MouseDrag {
+            col: col + 3,
+            row: row - 4,
+        },
+    );
+    step_frame(&mut app);
+    step_frame(&mut app);
+    update(&mut app, Message::MouseUp);
+    press(&mut app, KeyCode::Char('t'));
+    update(
+        &mut app,
+        Message::MouseDown {
+            col: col - 5,
+            row: top.inner.y,
+            button: Button::Right,
+            ctrl: false,
+        },
+    );
+    update(
+        &mut app,
+        Message::MouseDrag {
+            col: col - 5,
+            row: top.inner.y + top.inner.height - 1,
+        },
+    );
+    update(&mut app, Message::MouseUp);
+    for _ in 0..10 {
+        step_frame(&mut app);
+    }
+    press(&mut app, KeyCode::Char('A'));
+    let path = dir.path().join("pinned4-actions.jsonl");
+    let note = &app.note.as_ref().unwrap().text;
+    assert!(note.contains("touches written to"), "{note}");
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.lines().any(|l| l.contains("\"cut\"")), "{text}");
+    let scene = cloth_scene::load("pinned4", &[]).unwrap();
+    let points = scene.mesh.len();
+    let mut script = cloth_run::actions::Actions::parse(&text, "recorded", points).unwrap();
+    let mut replay = cloth_run::Run::new(scene, cloth_run::default_registry(), None).unwrap();
+    while replay.frames < app.sim.frames {
+        script.step_frame(&mut replay, &mut || {}).unwrap().unwrap();
+    }
+    assert_eq!(replay.state, app.sim.state);
+    assert_eq!(replay.scene.mesh, app.sim.scene.mesh);
+}
