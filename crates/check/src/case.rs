@@ -1,6 +1,6 @@
 //! The cases of a check: which scene, steps per frame, switches and stiffness.
 
-use cloth_mesh::StepParams;
+use cloth_mesh::{StepParams, Vec3};
 use cloth_scene::BUNDLED;
 use cloth_solver::REFERENCE_STEPS_PER_FRAME;
 
@@ -13,6 +13,11 @@ pub const SWAP_SCENES: [&str; 2] = ["pinned4", "sphere"];
 /// The frames of Verlet's run at which the swap cases swap: the fall (10), the catch (20) and
 /// the rebound or the contact (40).
 pub const SWAP_FRAMES: [usize; 3] = [10, 20, 40];
+
+/// The scene of the wind case: the hanging curtain, broadside to the wind.
+pub const WIND_SCENE: &str = "curtain";
+/// The wind of the wind case, m/s: across the curtain, a fresh breeze.
+pub const WIND_VELOCITY: [f64; 3] = [0.0, 0.0, 10.0];
 
 /// What a case runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,6 +38,8 @@ pub(crate) enum Kind {
         /// The frame of Verlet's run.
         at: usize,
     },
+    /// The solver at its own steps under [`WIND_VELOCITY`], against Verlet under it.
+    Wind,
 }
 
 /// One case of a check.
@@ -71,6 +78,11 @@ impl Case {
                 ks_name(ks)
             ),
             Kind::Swap { at } => format!("{} / swap at frame {at}", self.scene),
+            Kind::Wind => format!(
+                "{} / wind {} m/s across",
+                self.scene,
+                Vec3::from(WIND_VELOCITY).norm()
+            ),
         }
     }
 
@@ -84,7 +96,7 @@ impl Case {
                 ks,
                 ..
             } => Some(figure_key(self.scene, stretch_limit, self_collision, ks)),
-            Kind::Swap { .. } => None,
+            Kind::Swap { .. } | Kind::Wind => None,
         }
     }
 }
@@ -145,6 +157,12 @@ pub(crate) fn cases(steps: u32, scenes: &[(&'static str, StepParams)], full: boo
             }
         }
     }
+    if scenes.iter().any(|&(scene, _)| scene == WIND_SCENE) {
+        cases.push(Case {
+            scene: WIND_SCENE,
+            kind: Kind::Wind,
+        });
+    }
     for &(scene, _) in scenes {
         if SWAP_SCENES.contains(&scene) {
             for at in SWAP_FRAMES {
@@ -188,20 +206,21 @@ mod tests {
             .map(|n| (n, StepParams::default()))
             .collect();
         let quick = cases(1, &scenes, false);
-        // 8 scenes x (2 step counts x 2 limits + 2 stiff) + 2 scenes x 3 swaps.
-        assert_eq!(quick.len(), 8 * 6 + 6);
+        // 8 scenes x (2 step counts x 2 limits + 2 stiff) + 2 scenes x 3 swaps + the wind.
+        assert_eq!(quick.len(), 8 * 6 + 6 + 1);
         let verlet = cases(30, &scenes, false);
-        assert_eq!(verlet.len(), 8 * 6 + 6);
+        assert_eq!(verlet.len(), 8 * 6 + 6 + 1);
         // A solver meant for 2 steps runs them once.
-        assert_eq!(cases(2, &scenes, false).len(), 8 * 4 + 6);
+        assert_eq!(cases(2, &scenes, false).len(), 8 * 4 + 6 + 1);
         // Full: 5 step counts x 2 limits + 2 stiff, self-collision on and off.
-        assert_eq!(cases(1, &scenes, true).len(), 8 * 2 * 12 + 6);
+        assert_eq!(cases(1, &scenes, true).len(), 8 * 2 * 12 + 6 + 1);
         let ids: std::collections::BTreeSet<String> = quick.iter().map(Case::id).collect();
         assert_eq!(ids.len(), quick.len(), "case names are unique");
         assert!(ids.contains("sphere / 1 step / limit on / self-collision on / ks 5000"));
         assert!(ids.contains("pinned4 / 2 steps / limit off / self-collision on / ks 5000"));
         assert!(ids.contains("pinned4 / 1 step / limit on / self-collision on / ks 100000"));
         assert!(ids.contains("sphere / swap at frame 40"));
+        assert!(ids.contains("curtain / wind 10 m/s across"));
     }
 
     #[test]

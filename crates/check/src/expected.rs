@@ -87,6 +87,7 @@ mod tests {
             self_collision: None,
             ks: 5000.0,
             swap_frame: Some(10),
+            wind: None,
             measures: vec![Measure::at_most("swap", value, 0.05, "")],
             verdict: Verdict::Pass,
             note: None,
@@ -122,6 +123,7 @@ mod tests {
             self_collision: Some(true),
             ks: 5000.0,
             swap_frame: None,
+            wind: None,
             measures: vec![
                 Measure::at_most("energy rise", rise, 3.0, "J"),
                 Measure::at_most(crate::kit::TIME, time, 20.0, "s"),

@@ -37,6 +37,8 @@ pub const SWAP_TO: &str = "swap to";
 pub const SWAP_BACK: &str = "swap back";
 /// The relative change of kinetic energy over the first frame after an edit of steps per frame.
 pub const EDIT: &str = "edit";
+/// The wind case's measure: how far the curtain's centre goes downwind against Verlet.
+pub const WIND: &str = "wind";
 
 /// `H` may exceed `H(0)` by this share of `E = M |g| L`.
 pub const PEAK_SHARE: f64 = 1e-3;
@@ -59,6 +61,8 @@ pub const CONTACT_SPEED: f64 = 0.02;
 pub const SETTLE_VERLET_FACTOR: f64 = 3.0;
 /// The relative change of kinetic energy a swap or an edit may make over its first frame.
 pub const SWAP_SHARE: f64 = 0.05;
+/// Most relative difference of the wind case's distance downwind from Verlet's.
+pub const WIND_SHARE: f64 = 0.05;
 /// A case may take this many times Verlet's time on it, as measured by the calibration: its
 /// first frames, cheaper than its later ones (Verlet's own whole runs take two to eleven times
 /// what the calibration gives them), so the multiple is generous.
@@ -219,6 +223,7 @@ fn calibrate(scenes: &[(&'static str, Arc<Scene>)], cases: &[Case]) -> Result<Ti
         let self_collision = match case.kind {
             Kind::Run { self_collision, .. } => self_collision,
             Kind::Swap { .. } => true,
+            Kind::Wind => false,
         };
         if timing.contains_key(&(case.scene, self_collision)) {
             continue;
@@ -289,6 +294,7 @@ impl Context<'_> {
                 self.run_case(case, scene, params, ks)
             }
             Kind::Swap { at } => self.swap_case(case, scene, at),
+            Kind::Wind => self.wind_case(case, scene),
         }
     }
 
@@ -311,6 +317,7 @@ impl Context<'_> {
                 ..
             } => (Some(stretch_limit), Some(self_collision), None),
             Kind::Swap { at } => (None, None, Some(at)),
+            Kind::Wind => (Some(true), Some(false), None),
         };
         CaseReport {
             id: case.id(),
@@ -320,6 +327,7 @@ impl Context<'_> {
             self_collision,
             ks,
             swap_frame,
+            wind: (case.kind == Kind::Wind).then_some(crate::case::WIND_VELOCITY),
             measures: Vec::new(),
             verdict: Verdict::Pass,
             note: None,
@@ -414,6 +422,43 @@ impl Context<'_> {
         report
             .measures
             .push(Measure::at_most(TIME, time, budget, "s"));
+        Ok(report)
+    }
+
+    /// The wind case: the solver at its own steps and Verlet at the course's, each with the
+    /// curtain's self-collision off (the case is about the wind, and it stays quick), under
+    /// [`WIND_VELOCITY`](crate::case::WIND_VELOCITY) for 3 s.
+    fn wind_case(&self, case: &Case, scene: &Arc<Scene>) -> Result<CaseReport, CheckError> {
+        let steps = self.entry.steps_per_frame();
+        let mut report = Self::blank(case, steps, scene.params.ks);
+        let params = StepParams {
+            steps_per_frame: steps,
+            self_collision: false,
+            ks: scene.params.ks * self.check.ks_scale,
+            ..scene.params
+        };
+        let budget = self.budget(case.scene, false, REFERENCE_STEPS_PER_FRAME, &params);
+        let wind = cloth_mesh::Vec3::from(crate::case::WIND_VELOCITY);
+        let solver = measure::downwind(scene, params, self.entry, self.options, wind)?;
+        let reference = StepParams {
+            steps_per_frame: REFERENCE_STEPS_PER_FRAME,
+            ..params
+        };
+        let verlet = measure::downwind(scene, reference, &Verlet::ENTRY, &json!({}), wind)?;
+        let m = &mut report.measures;
+        match &solver.error {
+            Some(e) => {
+                m.push(Measure::at_least(FINITE, 0.0, 1.0, ""));
+                report.note = Some(e.clone());
+            }
+            None => m.push(Measure::at_most(
+                WIND,
+                relative_change(solver.distance, verlet.distance),
+                WIND_SHARE,
+                "",
+            )),
+        }
+        m.push(Measure::at_most(TIME, solver.seconds, budget, "s"));
         Ok(report)
     }
 
@@ -592,6 +637,54 @@ mod tests {
         assert_eq!(outcome(&run, ENERGY_PEAK), crate::Outcome::Pass, "{run}");
     }
 
+    /// Verlet that keeps the velocity of its own last step, as a solver holding a velocity of
+    /// its own does: what is done to the state between its steps is lost.
+    struct OwnVelocity {
+        verlet: Box<dyn Solver>,
+        last: Option<Vec<cloth_mesh::Vec3>>,
+    }
+
+    impl Solver for OwnVelocity {
+        fn name(&self) -> &'static str {
+            "own-velocity"
+        }
+
+        fn step(
+            &mut self,
+            mesh: &ClothMesh,
+            colliders: &[Collider],
+            params: &StepParams,
+            state: &mut ClothState,
+        ) -> Result<StepReport, SolveError> {
+            if let Some(last) = &self.last {
+                state.last.clone_from(last);
+            }
+            let report = self.verlet.step(mesh, colliders, params, state)?;
+            self.last = Some(state.last.clone());
+            Ok(report)
+        }
+    }
+
+    #[test]
+    fn verlet_passes_the_wind_and_a_solver_that_keeps_its_own_velocity_fails_it() {
+        let wind = Case {
+            scene: "curtain",
+            kind: Kind::Wind,
+        };
+        let verlet = run_one(&Verlet::ENTRY, &wind);
+        assert_eq!(verlet.verdict, Verdict::Pass, "{verlet}");
+        const OWN: SolverEntry =
+            SolverEntry::new("own-velocity", "loses the wind's push", |mesh, _| {
+                Ok(Box::new(OwnVelocity {
+                    verlet: Verlet::ENTRY.build(mesh, &json!({}))?,
+                    last: None,
+                }))
+            });
+        let own = run_one(&OWN, &wind);
+        assert_eq!(own.verdict, Verdict::Fail, "{own}");
+        assert_eq!(outcome(&own, WIND), crate::Outcome::Fail, "{own}");
+    }
+
     #[test]
     fn a_solver_that_drops_the_velocity_it_takes_over_fails_the_swap() {
         // A solver that keeps its own velocity, starting from rest, ignores the state's.
@@ -634,6 +727,7 @@ mod tests {
             self_collision: Some(true),
             ks: 5000.0,
             swap_frame: None,
+            wind: None,
             measures: vec![Measure::at_most(TIME, 3.0, 2.0, "s")],
             verdict: Verdict::Pass,
             note: None,

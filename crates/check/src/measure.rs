@@ -259,3 +259,58 @@ pub(crate) fn swap(
         seconds: started.elapsed().as_secs_f64(),
     })
 }
+
+/// Seconds of the wind case: the curtain has caught the wind and come to rest in it (the
+/// course's drag takes a swing down by e^-16 in 3 s).
+pub const WIND_SECONDS: f64 = 3.0;
+
+/// What the wind case measured of one solver.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Downwind {
+    /// How far the curtain's centre went along the wind, m.
+    pub distance: f64,
+    /// Why the run stopped early, if it did.
+    pub error: Option<String>,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// `entry`'s solver on `scene` with `params` under `wind` for [`WIND_SECONDS`]: how far the
+/// centre point went along the wind.
+pub(crate) fn downwind(
+    scene: &Arc<Scene>,
+    params: StepParams,
+    entry: &SolverEntry,
+    options: &Value,
+    wind: Vec3,
+) -> Result<Downwind, CheckError> {
+    let started = Instant::now();
+    let params = StepParams {
+        wind: cloth_mesh::Wind {
+            velocity: wind,
+            ..cloth_mesh::Wind::default()
+        },
+        ..params
+    };
+    let mut stepper = Stepper::new(scene, params, entry, options)?;
+    let mesh = &scene.mesh;
+    let centre = mesh.index(mesh.nw() / 2, mesh.nh() / 2);
+    let start = stepper.state().positions[centre];
+    let along = wind.try_normalize(0.0).unwrap_or_else(Vec3::zeros);
+    let mut error = None;
+    for frame in 1..=frames_in(WIND_SECONDS, &params) {
+        if let Err(e) = stepper.frame() {
+            error = Some(format!("frame {frame}: {e}"));
+            break;
+        }
+        if let Some(i) = stepper.state().first_non_finite() {
+            error = Some(format!("frame {frame}: point {i} is not finite"));
+            break;
+        }
+    }
+    Ok(Downwind {
+        distance: (stepper.state().positions[centre] - start).dot(&along),
+        error,
+        seconds: started.elapsed().as_secs_f64(),
+    })
+}

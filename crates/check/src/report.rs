@@ -123,6 +123,9 @@ pub struct CaseReport {
     pub ks: f64,
     /// The frame of Verlet's run at which a swap case swaps.
     pub swap_frame: Option<usize>,
+    /// The wind of the wind case, m/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wind: Option<[f64; 3]>,
     /// The measures, in the order of the crate's documentation.
     pub measures: Vec<Measure>,
     /// How the case came out.
@@ -235,9 +238,10 @@ impl fmt::Display for CaseReport {
             Some(false) => "off",
             None => "-",
         };
-        let what = match self.swap_frame {
-            Some(at) => format!("swap@{at}"),
-            None => "run".to_owned(),
+        let what = match (self.swap_frame, self.wind) {
+            (Some(at), _) => format!("swap@{at}"),
+            (None, Some(_)) => "wind".to_owned(),
+            (None, None) => "run".to_owned(),
         };
         write!(
             f,
