@@ -667,12 +667,6 @@ mod tests {
 
     #[test]
     fn verlet_passes_the_wind_and_a_solver_that_keeps_its_own_velocity_fails_it() {
-        let wind = Case {
-            scene: "curtain",
-            kind: Kind::Wind,
-        };
-        let verlet = run_one(&Verlet::ENTRY, &wind);
-        assert_eq!(verlet.verdict, Verdict::Pass, "{verlet}");
         const OWN: SolverEntry =
             SolverEntry::new("own-velocity", "loses the wind's push", |mesh, _| {
                 Ok(Box::new(OwnVelocity {
@@ -680,6 +674,12 @@ mod tests {
                     last: None,
                 }))
             });
+        let wind = Case {
+            scene: "curtain",
+            kind: Kind::Wind,
+        };
+        let verlet = run_one(&Verlet::ENTRY, &wind);
+        assert_eq!(verlet.verdict, Verdict::Pass, "{verlet}");
         let own = run_one(&OWN, &wind);
         assert_eq!(own.verdict, Verdict::Fail, "{own}");
         assert_eq!(outcome(&own, WIND), crate::Outcome::Fail, "{own}");
