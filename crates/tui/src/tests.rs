@@ -999,8 +999,16 @@ fn the_stats_key_writes_a_row_for_every_frame_of_the_run_so_far() {
     assert!(lines[0].starts_with("frame,time_s,"), "{text}");
     assert_eq!(lines.len(), 1 + 5, "the start and frames 1 to 4:\n{text}");
     assert!(lines[5].starts_with("4,"), "{text}");
-    // The UI does not time frames: the wall time column is empty.
-    assert!(lines[5].ends_with(",30,"), "{text}");
+    // Every frame's wall time (the time its steps took), none for the start.
+    assert!(lines[1].ends_with(",0,"), "{text}");
+    for line in &lines[2..] {
+        let (rest, wall) = line.rsplit_once(',').unwrap();
+        assert!(rest.ends_with(",30"), "{text}");
+        let wall: f64 = wall
+            .parse()
+            .unwrap_or_else(|_| panic!("a wall time: {line}"));
+        assert!(wall > 0.0 && wall < 60.0, "{line}");
+    }
     // A second export goes to a new file, and a reset starts the table again.
     press(&mut app, KeyCode::Char('r'));
     press(&mut app, KeyCode::Char('n'));
