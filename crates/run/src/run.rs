@@ -336,8 +336,18 @@ impl Run {
             need,
             (None, memory::SMALLER_SCENE),
         )?;
-        let built = choice.build(&self.scene.mesh)?;
-        if self.solver.is_some() {
+        // NOTE: as in `apply_options`, the old solver goes before the new one is built.
+        let had = self.solver.take().is_some();
+        let built = match choice.build(&self.scene.mesh) {
+            Ok(built) => built,
+            Err(e) => {
+                if had {
+                    self.solver = self.choice.build(&self.scene.mesh).ok();
+                }
+                return Err(e);
+            }
+        };
+        if had {
             self.solver = Some(built);
         }
         let follow = self.steps_follow_solver();
@@ -405,9 +415,13 @@ impl Run {
             entry,
             options: Value::Object(options),
         };
+        // NOTE: the old solver goes before the new one is built, so a big cloth's run never
+        // holds two solvers' scratch at once (the memory check counts one); should the new one
+        // be refused, the old is built again.
+        let had = self.solver.take().is_some();
         match choice.build(&self.scene.mesh) {
             Ok(solver) => {
-                if self.solver.is_some() {
+                if had {
                     self.solver = Some(solver);
                 }
                 self.choice = choice;
@@ -415,6 +429,9 @@ impl Run {
             }
             Err(e) => {
                 self.settings.options = numeric_options(&entry, &self.choice.options);
+                if had {
+                    self.solver = self.choice.build(&self.scene.mesh).ok();
+                }
                 Err(e)
             }
         }
