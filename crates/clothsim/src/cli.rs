@@ -326,29 +326,7 @@ fn completions(registry: &Registry, program: &str, shell: Shell) -> Vec<u8> {
             }
             out
         }
-        Shell::Zsh => {
-            // The scene's action becomes a function offering both, defined after `#compdef`.
-            let mut out = String::with_capacity(text.len() + 256);
-            for (i, line) in text.lines().enumerate() {
-                if line.contains(":scene -- ") && line.ends_with(":_files' \\") {
-                    let cut = line.len() - ":_files' \\".len();
-                    out.push_str(&line[..cut]);
-                    let _ = write!(out, ":_{label}_scenes' \\");
-                } else {
-                    out.push_str(line);
-                }
-                out.push('\n');
-                if i == 0 {
-                    let _ = write!(
-                        out,
-                        "\n_{label}_scenes() {{\n    \
-                         _alternative 'scenes:bundled scene:({names})' \\\n        \
-                         'files:scene file:_files -g \"*.json\"'\n}}\n"
-                    );
-                }
-            }
-            out
-        }
+        Shell::Zsh => zsh_completions(&cmd, &text, program, &label, &names),
         Shell::Fish => {
             let mut text = text;
             let takes_scene = "__fish_seen_subcommand_from tui compare simulate render";
@@ -364,6 +342,86 @@ fn completions(registry: &Registry, program: &str, shell: Shell) -> Vec<u8> {
         _ => text,
     };
     text.into_bytes()
+}
+
+/// clap_complete's zsh script `text` for `cmd` made right for a program whose first word is a
+/// command or a scene (`clothsim render ...`, `clothsim sphere ...`), with the bundled `names`.
+///
+/// clap_complete gives the top level's optional scene the first place and the command the
+/// second, so the first word was always taken for a scene: `clothsim render -<Tab>` offered
+/// the live UI's flags and `clothsim simulate <Tab>` the commands again. Here the first place
+/// offers both, and a first word that is no command is completed as `tui SCENE` is. Every
+/// scene's action becomes a function offering the bundled names and `*.json` files.
+fn zsh_completions(
+    cmd: &clap::Command,
+    text: &str,
+    program: &str,
+    label: &str,
+    names: &str,
+) -> String {
+    let mut commands: Vec<&str> = cmd.get_subcommands().map(clap::Command::get_name).collect();
+    if !commands.contains(&"help") {
+        commands.push("help");
+    }
+    let commands = commands.join("|");
+    let mut out = String::with_capacity(text.len() + 1024);
+    // Until the top level's dispatch on its first word has been rewritten.
+    let mut top = true;
+    for (i, line) in text.lines().enumerate() {
+        let is_scene = line.contains(":scene -- ") && line.ends_with(":_files' \\");
+        if top && is_scene {
+            // The top level's scene shares the first place with the commands.
+            continue;
+        }
+        if top && line.starts_with("\":: :_") && line.ends_with("_commands\" \\") {
+            let _ = writeln!(out, "\":: :_{label}_commands_or_scenes\" \\");
+            continue;
+        }
+        if top && line.trim_start().starts_with("words=($line[2] ") {
+            let indent = &line[..line.len() - line.trim_start().len()];
+            let _ = writeln!(
+                out,
+                "{indent}case $line[1] in\n\
+                 {indent}    ({commands}) ;;\n\
+                 {indent}    (*)\n\
+                 {indent}        # A scene: what follows is completed as after `tui SCENE`.\n\
+                 {indent}        words=($line[1] \"${{words[@]}}\")\n\
+                 {indent}        (( CURRENT += 1 ))\n\
+                 {indent}        line[1]=tui\n\
+                 {indent}        ;;\n\
+                 {indent}esac"
+            );
+        }
+        let line = if top && line.contains("$line[2]") {
+            line.replace("$line[2]", "$line[1]")
+        } else {
+            line.to_owned()
+        };
+        if top && line.trim_start().starts_with("case $line[1] in") {
+            top = false;
+        }
+        if is_scene {
+            let cut = line.len() - ":_files' \\".len();
+            out.push_str(&line[..cut]);
+            let _ = write!(out, ":_{label}_scenes' \\");
+        } else {
+            out.push_str(&line);
+        }
+        out.push('\n');
+        if i == 0 {
+            let _ = write!(
+                out,
+                "\n_{label}_scenes() {{\n    \
+                 _alternative 'scenes:bundled scene:({names})' \\\n        \
+                 'files:scene file:_files -g \"*.json\"'\n}}\n\n\
+                 _{label}_commands_or_scenes() {{\n    \
+                 _alternative 'commands:command:_{program}_commands' \\\n        \
+                 'scenes:bundled scene:({names})' \\\n        \
+                 'files:scene file:_files -g \"*.json\"'\n}}\n"
+            );
+        }
+    }
+    out
 }
 
 /// `--version`'s text after the program's name: the version, the solvers of `registry` and the
@@ -668,8 +726,12 @@ mod tests {
         assert!(zsh.contains("_files -g"), "zsh offers scene files too");
         assert_eq!(
             zsh.matches(":_clothsim_scenes'").count(),
-            5,
-            "the scene of the top level, tui, compare, simulate and render:\n{zsh}"
+            4,
+            "the scene of tui, compare, simulate and render:\n{zsh}"
+        );
+        assert!(
+            zsh.contains("\":: :_clothsim_commands_or_scenes\""),
+            "the top level's first word, a command or a scene:\n{zsh}"
         );
     }
 
@@ -718,7 +780,11 @@ mod tests {
         assert_eq!(with_scenes, 5, "the scene names are still offered:\n{bash}");
         let zsh = String::from_utf8(completions(&registry, program, Shell::Zsh)).expect("UTF-8");
         assert!(zsh.starts_with("#compdef clothsim-xpbd"), "{zsh}");
-        assert_eq!(zsh.matches(":_clothsim__xpbd_scenes'").count(), 5, "{zsh}");
+        assert_eq!(zsh.matches(":_clothsim__xpbd_scenes'").count(), 4, "{zsh}");
+        assert!(
+            zsh.contains("_alternative 'commands:command:_clothsim-xpbd_commands'"),
+            "{zsh}"
+        );
         assert!(zsh.contains("\n_clothsim__xpbd_scenes() {"), "{zsh}");
         let fish = String::from_utf8(completions(&registry, program, Shell::Fish)).expect("UTF-8");
         assert!(fish.contains("complete -c clothsim-xpbd -n"), "{fish}");

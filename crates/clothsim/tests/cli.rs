@@ -626,6 +626,22 @@ fn help_lists_the_values_of_enumerated_options_and_ends_with_examples() {
 }
 
 #[test]
+fn the_help_of_from_names_the_reset_key_and_not_the_record_key() {
+    for args in [&["tui", "--help"][..], &["--help"][..]] {
+        let o = clothsim(args);
+        assert!(o.status.success());
+        let help = String::from_utf8(o.stdout).unwrap();
+        let help = help.split_whitespace().collect::<Vec<_>>().join(" ");
+        // r resets; R records the screen.
+        assert!(
+            help.contains("r resets to the scene's flat start"),
+            "{help}"
+        );
+        assert!(!help.contains("R still resets"), "{help}");
+    }
+}
+
+#[test]
 fn the_version_names_the_built_in_solvers_and_vector_paths() {
     let o = clothsim(&["--version"]);
     assert!(o.status.success());

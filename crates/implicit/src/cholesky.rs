@@ -3,7 +3,7 @@
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
@@ -25,11 +25,31 @@ impl<T> Analysis<T> {
         self.symbolic.len_val()
     }
 
-    /// Bytes the numeric factor and its workspace take: its values plus the workspace (the
-    /// symbolic factor itself is already allocated).
+    /// Bytes the factorisation holds: the symbolic factor (kept for every refactorisation),
+    /// the numeric factor's values and the workspace.
     pub(crate) fn bytes(&self) -> u64 {
-        (size_of::<T>() * self.factor_len() + self.scratch.unaligned_bytes_required()) as u64
+        symbolic_bytes(&self.symbolic)
+            + (size_of::<T>() * self.factor_len() + self.scratch.unaligned_bytes_required()) as u64
     }
+}
+
+/// Bytes of `symbolic`'s arrays: the fill-reducing permutation and its inverse, and the
+/// factor's structure (simplicial: column pointers and row indices; supernodal: the supernodes'
+/// bounds, pointers and row indices, and faer's row-major copy of their pattern, as long again).
+fn symbolic_bytes(symbolic: &SymbolicCholesky<usize>) -> u64 {
+    let perm = if symbolic.perm().is_some() {
+        2 * symbolic.nrows()
+    } else {
+        0
+    };
+    let structure = match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => s.col_ptr().len() + s.row_idx().len(),
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let supernodes = s.n_supernodes() + 1;
+            5 * supernodes + 2 * s.row_idx().len()
+        }
+    };
+    (size_of::<usize>() * (perm + structure)) as u64
 }
 
 /// The floating-point type a [`Cholesky`] factor is stored and computed in.

@@ -325,7 +325,8 @@ fn start_positions(spec: &GridSpec) -> Vec<Vec3> {
 fn build_springs(nw: usize, nh: usize, start: &[Vec3]) -> Vec<Spring> {
     let structural = 2 * nw * nh - nw - nh;
     let shearing = 2 * (nw - 1) * (nh - 1);
-    let bending = (2 * nw * nh).saturating_sub(3 * (nw + nh));
+    // Two apart along a row, and along a column.
+    let bending = nw.saturating_sub(2) * nh + nw * nh.saturating_sub(2);
     let mut springs = Vec::with_capacity(structural + shearing + bending);
     // NOTE: the order is the course's; the stretch limit is a sequential sweep, so reordering
     // would change results in the last bits.
@@ -415,6 +416,26 @@ mod tests {
         assert_eq!(count(&mesh, SpringKind::Shearing), 2 * (nw - 1) * (nh - 1));
         assert_eq!(count(&mesh, SpringKind::Bending), structural - nw - nh);
         assert_eq!(mesh.springs().len(), 14_502);
+    }
+
+    #[test]
+    fn the_arrays_hold_no_room_beyond_the_cloth() {
+        // What the memory check counts is the arrays' lengths: a spring array that outgrew a
+        // short reservation would hold up to twice that.
+        for (nw, nh) in [(2, 2), (2, 7), (50, 50), (31, 3), (120, 80)] {
+            let mut spec = standard().spec().clone();
+            spec.num_width_points = nw;
+            spec.num_height_points = nh;
+            spec.pinned = vec![(0, 0)];
+            let mesh = ClothMesh::new(&spec).unwrap();
+            assert_eq!(mesh.springs.capacity(), mesh.springs.len(), "{nw} x {nh}");
+            assert_eq!(
+                mesh.triangles.capacity(),
+                mesh.triangles.len(),
+                "{nw} x {nh}"
+            );
+            assert_eq!(mesh.start.capacity(), mesh.start.len(), "{nw} x {nh}");
+        }
     }
 
     #[test]

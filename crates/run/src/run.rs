@@ -198,6 +198,8 @@ pub struct Run {
     /// Frames completed since the start or the last reset.
     pub frames: u64,
     step_in_frame: u32,
+    /// Wall time spent in the steps of the frame in progress (its row's `wall_s`).
+    frame_wall: std::time::Duration,
     /// Plot samples, oldest first.
     pub history: VecDeque<Sample>,
     /// Every frame's row of numbers since the start or the last reset (the table the plots'
@@ -276,6 +278,7 @@ impl Run {
             steps: 0,
             frames: 0,
             step_in_frame: 0,
+            frame_wall: std::time::Duration::ZERO,
             history: VecDeque::with_capacity(HISTORY),
             record: Vec::new(),
             generation: 0,
@@ -375,8 +378,18 @@ impl Run {
             need,
             (None, memory::SMALLER_SCENE),
         )?;
-        let built = choice.build(&self.scene.mesh)?;
-        if self.solver.is_some() {
+        // NOTE: as in `apply_options`, the old solver goes before the new one is built.
+        let had = self.solver.take().is_some();
+        let built = match choice.build(&self.scene.mesh) {
+            Ok(built) => built,
+            Err(e) => {
+                if had {
+                    self.solver = self.choice.build(&self.scene.mesh).ok();
+                }
+                return Err(e);
+            }
+        };
+        if had {
             self.solver = Some(built);
         }
         let follow = self.steps_follow_solver();
@@ -444,9 +457,13 @@ impl Run {
             entry,
             options: Value::Object(options),
         };
+        // NOTE: the old solver goes before the new one is built, so a big cloth's run never
+        // holds two solvers' scratch at once (the memory check counts one); should the new one
+        // be refused, the old is built again.
+        let had = self.solver.take().is_some();
         match choice.build(&self.scene.mesh) {
             Ok(solver) => {
-                if self.solver.is_some() {
+                if had {
                     self.solver = Some(solver);
                 }
                 self.choice = choice;
@@ -454,6 +471,9 @@ impl Run {
             }
             Err(e) => {
                 self.settings.options = numeric_options(&entry, &self.choice.options);
+                if had {
+                    self.solver = self.choice.build(&self.scene.mesh).ok();
+                }
                 Err(e)
             }
         }
@@ -471,6 +491,7 @@ impl Run {
         self.frames = frames;
         self.steps = frames.saturating_mul(u64::from(self.settings.params.steps_per_frame));
         self.step_in_frame = 0;
+        self.frame_wall = std::time::Duration::ZERO;
         self.history.clear();
         self.record.clear();
         self.generation += 1;
@@ -497,6 +518,7 @@ impl Run {
         self.steps = 0;
         self.frames = 0;
         self.step_in_frame = 0;
+        self.frame_wall = std::time::Duration::ZERO;
         self.history.clear();
         self.record.clear();
         self.generation += 1;
@@ -692,6 +714,7 @@ impl Run {
         if let Some(f) = &self.fault {
             return Err(Box::new(f.clone()));
         }
+        let started = std::time::Instant::now();
         let dt = self.dt();
         if self.solver.is_some() && self.settings.params.wind.blows() {
             // NOTE: applied here, before the solver's step and through the previous positions,
@@ -751,6 +774,9 @@ impl Run {
         self.time += dt;
         self.steps += 1;
         self.step_in_frame += 1;
+        // NOTE: only the time in the steps counts, so a frame paused half way (the live UI
+        // pauses between any two steps) is timed as one stepped straight through.
+        self.frame_wall += started.elapsed();
         if self.step_in_frame >= self.settings.params.steps_per_frame {
             self.step_in_frame = 0;
             self.frames += 1;
@@ -806,6 +832,7 @@ impl Run {
     }
 
     fn end_frame(&mut self) -> Result<(), Box<Fault>> {
+        let wall = std::mem::take(&mut self.frame_wall);
         if self.held.is_some() {
             self.guard.forget_energy();
         }
@@ -820,15 +847,15 @@ impl Run {
                 return Err(Box::new(self.fail(&d)));
             }
         }
-        let sample = self.measure();
+        let sample = self.measure(Some(wall.as_secs_f64()));
         self.push(sample);
         self.last_good.clone_from(&self.state);
         Ok(())
     }
 
-    /// The row of the frame just ended (of the start, before any step); the wall time is the
-    /// caller's to measure, so it is left out.
-    fn measure(&self) -> StatsRow {
+    /// The row of the frame just ended, whose steps took `wall` seconds (of the start, before
+    /// any step: `None`).
+    fn measure(&self, wall: Option<f64>) -> StatsRow {
         let steps = if self.steps == 0 {
             0
         } else {
@@ -842,7 +869,7 @@ impl Run {
             self.frames,
             self.time,
             steps,
-            None,
+            wall,
         )
     }
 
@@ -867,7 +894,7 @@ impl Run {
     fn sample(&mut self) {
         self.guard
             .start(&self.scene.mesh, &self.state, &self.settings.params);
-        let s = self.measure();
+        let s = self.measure(None);
         self.push(s);
     }
 
@@ -945,6 +972,36 @@ mod tests {
     fn pinned4(registry: Registry) -> Run {
         let scene = cloth_scene::load("pinned4", &[]).unwrap();
         Run::new(scene, registry, None).unwrap()
+    }
+
+    #[test]
+    fn each_frame_s_row_holds_the_wall_time_of_its_steps_and_not_of_a_pause_between_them() {
+        let mut sim = pinned4(crate::solvers::default_registry());
+        let started = std::time::Instant::now();
+        sim.step_frame().unwrap();
+        let whole = started.elapsed().as_secs_f64();
+        // The second frame is stepped in two halves with a pause between them, as the live UI
+        // pauses between any two steps.
+        let half = sim.settings.params.steps_per_frame / 2;
+        let mut stepping = 0.0;
+        for steps in [half, sim.settings.params.steps_per_frame - half] {
+            let started = std::time::Instant::now();
+            for _ in 0..steps {
+                sim.step().unwrap();
+            }
+            stepping += started.elapsed().as_secs_f64();
+            std::thread::sleep(std::time::Duration::from_millis(100));
+        }
+        let walls: Vec<Option<f64>> = sim.record.iter().map(|r| r.wall_s).collect();
+        assert_eq!(walls.len(), 3, "the start and two frames");
+        assert_eq!(walls[0], None, "the start took no steps");
+        let first = walls[1].expect("the first frame is timed");
+        assert!(first > 0.0 && first <= whole, "{first} s within {whole} s");
+        let second = walls[2].expect("the second frame is timed");
+        assert!(
+            second > 0.0 && second <= stepping,
+            "{second} s: its steps' {stepping} s, not the 0.1 s pause"
+        );
     }
 
     #[test]

@@ -36,6 +36,21 @@ pub struct Regions {
     pub table: Rect,
 }
 
+impl Regions {
+    /// The insides of the panes, the variants' panes and the plots: the pictures, which
+    /// change all over while the cloth moves (the rest is text).
+    pub fn pictures(&self) -> Vec<Rect> {
+        self.panes
+            .iter()
+            .map(|&(_, r)| r)
+            .chain(self.variants.iter().copied())
+            .chain(self.plots)
+            .map(inner)
+            .filter(|r| !r.is_empty())
+            .collect()
+    }
+}
+
 /// The regions for `area`, or `None` when it is smaller than [`MIN_WIDTH`] x [`MIN_HEIGHT`].
 pub fn regions(app: &App, area: Rect) -> Option<Regions> {
     if area.width < MIN_WIDTH || area.height < MIN_HEIGHT {

@@ -10,7 +10,7 @@
 //! The [`Pacer`] keeps about one frame in flight: after a frame and its query, the next frame
 //! waits for the answer. Each answer also measures the link (bytes over round trip), and a
 //! frame is cut to what the link takes in [`TARGET`] (the rest follows in the next frames,
-//! the lightly changed rows first), so a key's answer is on screen within about two round
+//! the text before the cloth), so a key's answer is on screen within about two round
 //! trips and two targets. Only drawing slows down: the simulation runs on at its own rate.
 //!
 //! A `--max-rate` caps the bytes per second by hand, as a token bucket. A terminal that never

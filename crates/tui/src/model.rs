@@ -411,7 +411,13 @@ impl App {
     pub fn start_worker(&mut self, notify: Notify) -> anyhow::Result<()> {
         self.sent = (self.sim.settings.clone(), self.sim.entry().name());
         let n = std::sync::Arc::clone(&notify);
+        // NOTE: the UI's copies let go of their solvers before the thread's are built, so a
+        // big cloth never has two solvers' scratch at once (the memory check counts one each).
+        self.sim.release_solver();
         if let Some(c) = &mut self.compare {
+            for m in &mut c.members {
+                m.sim.release_solver();
+            }
             let mut sims = vec![Self::stepping_copy(&self.sim)?];
             for m in &c.members {
                 sims.push(Self::stepping_copy(&m.sim)?);
@@ -424,9 +430,6 @@ impl App {
                 threads,
                 Box::new(move || n()),
             )?);
-            for m in &mut c.members {
-                m.sim.release_solver();
-            }
         } else {
             self.worker = Some(Lockstep::spawn(
                 vec![Self::stepping_copy(&self.sim)?],
@@ -436,7 +439,6 @@ impl App {
                 Box::new(move || n()),
             )?);
         }
-        self.sim.release_solver();
         self.notify = Some(notify);
         Ok(())
     }

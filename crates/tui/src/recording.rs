@@ -52,7 +52,7 @@ impl Recording {
         let start = *self.start.get_or_insert(now);
         let time = now.saturating_duration_since(start).as_secs_f64();
         let mut data = Vec::new();
-        let painted = self.painter.paint(buffer, None, &mut data);
+        let painted = self.painter.paint(buffer, None, &[], &mut data);
         if painted.bytes == 0 {
             return Ok(());
         }

@@ -27,7 +27,7 @@ use super::decode::{Decoder, Input};
 use super::link::Pacer;
 use super::model::{App, Level, Stats};
 use super::terminal::{self, TerminalGuard};
-use super::{Message, input, panes, update, view};
+use super::{Message, input, layout, panes, update, view};
 
 /// How often the drawing rate refreshes.
 const WINDOW: Duration = Duration::from_secs(1);
@@ -305,7 +305,9 @@ fn event_loop(
             pacer.hold(now);
         } else if due {
             let size = guard.terminal.size()?;
-            panes::prepare(app, Rect::new(0, 0, size.width, size.height));
+            let area = Rect::new(0, 0, size.width, size.height);
+            panes::prepare(app, area);
+            let pictures = layout::regions(app, area).map_or_else(Vec::new, |r| r.pictures());
             // NOTE: the finished buffer is copied out because the terminal lends it only
             // while it is itself borrowed.
             let drawn = guard.terminal.draw(|f| view(app, f))?.buffer.clone();
@@ -314,7 +316,7 @@ fn event_loop(
             let painted = guard
                 .terminal
                 .backend_mut()
-                .present(&drawn, budget, query)?;
+                .present(&drawn, budget, &pictures, query)?;
             if let Some(r) = app.recording.as_mut()
                 && let Err(e) = r.frame(&drawn, now)
             {

@@ -6,8 +6,9 @@
 //! differ: one style escape per run of equal style ([`super::sgr::Pen`]), short cursor moves,
 //! and at most a byte budget when the link to the terminal is slow. What is left over is
 //! written by the next present, so a frame cut short is finished rather than lost, and the
-//! rows that changed little (the header's PAUSED, a note, a dialog's line) go before the
-//! cloth's many changed cells.
+//! text (the header's PAUSED, a note, a dialog's line: where a key's answer shows) goes before
+//! the pictures (the cloth panes and the plots), whose cells change all over while the cloth
+//! moves.
 
 use std::io::{self, Write};
 
@@ -71,48 +72,79 @@ impl Painter {
 
     /// Appends to `out` the bytes that make the terminal show `want`, stopping once `out` has
     /// grown by `budget` bytes (whole cells only). The style is back to the default at the end.
-    pub fn paint(&mut self, want: &Buffer, budget: Option<usize>, out: &mut Vec<u8>) -> Painted {
+    ///
+    /// Cells outside `pictures` (the text: the header, notes, the panel, the footer) are
+    /// written first, top to bottom; then the pictures' cells, their lightly changed rows
+    /// first, the rest from where the last cut-short present stopped, round the screen.
+    pub fn paint(
+        &mut self,
+        want: &Buffer,
+        budget: Option<usize>,
+        pictures: &[Rect],
+        out: &mut Vec<u8>,
+    ) -> Painted {
         let start = out.len();
         if want.area != self.shown.area {
             out.extend_from_slice(b"\x1b[0m\x1b[2J");
             self.cleared(want.area);
         }
         let area = want.area;
-        let width = usize::from(area.width);
-        // Rows in the order they are written: the lightly changed ones top to bottom, then
-        // the rest from where the last cut-short present stopped, round the screen.
+        let in_picture = |x: u16, y: u16| {
+            pictures
+                .iter()
+                .any(|r| r.contains(ratatui::layout::Position { x, y }))
+        };
+        // NOTE: a key's answer is text (PAUSED in the header, a note, a panel row) and is
+        // often a whole row shifted (RUNNING is a letter longer than PAUSED); were it ranked
+        // with the pictures' rows by how much changed, a moving cloth would keep it waiting
+        // for its turn round the screen, seconds over a slow link.
+        let mut text = Vec::new();
         let mut light = Vec::new();
         let mut heavy = Vec::new();
         for y in area.top()..area.bottom() {
-            let changed = (area.left()..area.right())
-                .filter(|&x| differs(&self.shown, want, x, y))
-                .count();
-            if changed == 0 {
+            let (mut words, mut picture, mut width) = (0, 0, 0);
+            for x in area.left()..area.right() {
+                let p = in_picture(x, y);
+                width += usize::from(p);
+                if differs(&self.shown, want, x, y) {
+                    if p {
+                        picture += 1;
+                    } else {
+                        words += 1;
+                    }
+                }
+            }
+            if words > 0 {
+                text.push((y, false));
+            }
+            if picture == 0 {
                 continue;
             }
-            if changed * LIGHT <= width {
-                light.push(y);
+            if picture * LIGHT <= width {
+                light.push((y, true));
             } else {
-                heavy.push(y);
+                heavy.push((y, true));
             }
         }
         let pivot = heavy
             .iter()
-            .position(|&y| y >= self.resume_row)
+            .position(|&(y, _)| y >= self.resume_row)
             .unwrap_or(0);
         heavy.rotate_left(pivot);
         let limit = budget.map_or(usize::MAX, |b| start.saturating_add(b));
         let mut unfinished = false;
-        'rows: for y in light.into_iter().chain(heavy) {
+        'rows: for (y, pictured) in text.into_iter().chain(light).chain(heavy) {
             let mut x = area.left();
             while x < area.right() {
-                if !differs(&self.shown, want, x, y) {
+                if in_picture(x, y) != pictured || !differs(&self.shown, want, x, y) {
                     x += 1;
                     continue;
                 }
                 if out.len() >= limit {
                     unfinished = true;
-                    self.resume_row = y;
+                    if pictured {
+                        self.resume_row = y;
+                    }
                     break 'rows;
                 }
                 self.move_to(x, y, want, out);
@@ -182,7 +214,15 @@ impl Painter {
                 })
                 .collect();
             match reprint {
-                Some(bytes) if bytes.len() <= forward => out.extend_from_slice(&bytes),
+                Some(bytes) if bytes.len() <= forward => {
+                    out.extend_from_slice(&bytes);
+                    // The reprinted cells are now what the terminal shows, changed or not.
+                    for gx in cx..x {
+                        if let Some(c) = self.shown.cell_mut((gx, y)) {
+                            c.clone_from(&want[(gx, y)]);
+                        }
+                    }
+                }
                 _ if gap == 1 => out.extend_from_slice(b"\x1b[C"),
                 _ => out.extend_from_slice(format!("\x1b[{gap}C").as_bytes()),
             }
@@ -267,8 +307,9 @@ impl<W: Write> Screen<W> {
         &self.out
     }
 
-    /// Writes to the terminal what changes it to `want` (at most `budget` bytes of cells),
-    /// inside a synchronized update, then the status query when `query`; all in one write.
+    /// Writes to the terminal what changes it to `want` (at most `budget` bytes of cells, the
+    /// text before the `pictures`), inside a synchronized update, then the status query when
+    /// `query`; all in one write.
     ///
     /// # Errors
     /// When the terminal cannot be written.
@@ -276,11 +317,12 @@ impl<W: Write> Screen<W> {
         &mut self,
         want: &Buffer,
         budget: Option<usize>,
+        pictures: &[Rect],
         query: bool,
     ) -> io::Result<Painted> {
         let mut bytes = Vec::new();
         bytes.extend_from_slice(b"\x1b[?2026h");
-        let painted = self.painter.paint(want, budget, &mut bytes);
+        let painted = self.painter.paint(want, budget, pictures, &mut bytes);
         if painted.bytes == 0 {
             bytes.clear();
         } else {
@@ -523,7 +565,7 @@ pub(crate) mod tests {
         for k in 0..20 {
             let b = frame(k, w, h);
             let mut out = Vec::new();
-            let painted = p.paint(&b, None, &mut out);
+            let painted = p.paint(&b, None, &[], &mut out);
             assert!(!painted.unfinished);
             m.feed(&out);
             assert_eq!(m.rows(), text_of(&b), "frame {k}");
@@ -536,13 +578,13 @@ pub(crate) mod tests {
         let mut p = Painter::new(Rect::new(0, 0, w, h), false);
         let mut m = Model::new(w, h);
         let mut out = Vec::new();
-        p.paint(&frame(0, w, h), None, &mut out);
+        p.paint(&frame(0, w, h), None, &[], &mut out);
         m.feed(&out);
         let b = frame(5, w, h);
         let mut rounds = 0;
         loop {
             let mut out = Vec::new();
-            let painted = p.paint(&b, Some(120), &mut out);
+            let painted = p.paint(&b, Some(120), &[], &mut out);
             // A cell's bytes may pass the budget, never by more than one cell and the reset.
             assert!(out.len() <= 120 + 40, "{}", out.len());
             m.feed(&out);
@@ -560,13 +602,61 @@ pub(crate) mod tests {
         assert_eq!(m.rows(), text_of(&b));
     }
 
+    /// Frame `k` with `header` (padded to the width) on its top row.
+    fn with_header(k: u16, w: u16, h: u16, header: &str) -> Buffer {
+        let mut b = frame(k, w, h);
+        let line = format!("{header:<width$}", width = usize::from(w));
+        b.set_string(0, 0, line, RStyle::default().bold());
+        b
+    }
+
+    #[test]
+    fn text_goes_before_the_pictures_however_much_of_its_row_changed() {
+        // A header shifted by a letter (PAUSED to RUNNING) changes its whole row, as much as
+        // a moving cloth changes each of its rows.
+        let (w, h) = (60, 16);
+        let picture = Rect::new(0, 2, w, h - 3);
+        let mut p = Painter::new(Rect::new(0, 0, w, h), false);
+        let mut m = Model::new(w, h);
+        let paused = " clothsim  pinned4  verlet  PAUSED 1x  t 3.556 s  draw 2.4 ms";
+        let running = " clothsim  pinned4  verlet  RUNNING 1x  t 3.556 s  draw 2.4 ms";
+        let mut out = Vec::new();
+        p.paint(&with_header(0, w, h, paused), None, &[picture], &mut out);
+        m.feed(&out);
+        // The cloth moves and the link is slow: a frame is cut part way down the picture.
+        let mut out = Vec::new();
+        let cut = p.paint(
+            &with_header(3, w, h, paused),
+            Some(300),
+            &[picture],
+            &mut out,
+        );
+        assert!(cut.unfinished && p.resume_row > 0, "{}", p.resume_row);
+        m.feed(&out);
+        // Space: the next frame's budget goes to the header before any of the cloth.
+        let b = with_header(6, w, h, running);
+        let mut out = Vec::new();
+        let painted = p.paint(&b, Some(300), &[picture], &mut out);
+        m.feed(&out);
+        assert!(
+            painted.unfinished,
+            "the budget is less than the cloth's change"
+        );
+        assert_eq!(m.rows()[0], text_of(&b)[0], "the header is written whole");
+        assert_eq!(
+            m.rows()[h as usize - 1],
+            text_of(&b)[h as usize - 1],
+            "so is the footer"
+        );
+    }
+
     #[test]
     fn wide_characters_and_a_resize_are_painted_right() {
         let mut p = Painter::new(Rect::new(0, 0, 6, 2), false);
         let mut b = Buffer::empty(Rect::new(0, 0, 8, 2));
         b.set_string(0, 0, "a界b", RStyle::default());
         let mut out = Vec::new();
-        p.paint(&b, None, &mut out);
+        p.paint(&b, None, &[], &mut out);
         let m = Model::replay(&out, 8, 2);
         // The model gives every character one cell; the terminal gives 界 two.
         assert!(String::from_utf8(out.clone()).unwrap().contains("a界"));
@@ -616,7 +706,7 @@ pub(crate) mod tests {
                 .unwrap()
                 .buffer
                 .clone();
-            new.backend_mut().present(&drawn, None, true).unwrap();
+            new.backend_mut().present(&drawn, None, &[], true).unwrap();
         }
         (sink.0.borrow().len() + sync, new.backend().writer().len())
     }
@@ -639,7 +729,7 @@ pub(crate) mod tests {
         let mut m = Model::new(100, 30);
         for f in &frames {
             let mut out = Vec::new();
-            p.paint(f, None, &mut out);
+            p.paint(f, None, &[], &mut out);
             m.feed(&out);
             assert_eq!(m.rows(), text_of(f));
             for (shown, want) in p.shown.content.iter().zip(&f.content) {
@@ -662,7 +752,7 @@ pub(crate) mod tests {
                 .add_modifier(Modifier::BOLD),
         );
         let mut out = Vec::new();
-        Painter::new(b.area, true).paint(&b, None, &mut out);
+        Painter::new(b.area, true).paint(&b, None, &[], &mut out);
         let s = String::from_utf8(out).unwrap();
         assert!(!s.contains("38;") && !s.contains("48;"), "{s:?}");
         assert!(s.contains("91m"), "{s:?}");

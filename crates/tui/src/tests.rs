@@ -11,7 +11,7 @@ use ratatui::backend::TestBackend;
 use ratatui::crossterm::event::{Event, KeyCode, KeyEvent, KeyModifiers};
 use ratatui::layout::Rect;
 
-use super::model::{Overlay, Then};
+use super::model::{Level, Overlay, Then};
 use super::params::PARAMS;
 use super::{App, Args, Message, build_in, input, panes, update, view};
 
@@ -468,6 +468,12 @@ fn the_stretch_limit_off_experiment_runs_on_and_stretches() {
         .map(|s| s.stretch)
         .fold(0.0, f64::max);
     assert!(peak > 2.0, "the cloth stretched (peak {peak})");
+    // Nothing advises a cure for what is the experiment itself (no constraint order holds a
+    // limit that is off).
+    let note = app.note.as_ref().map_or("", |n| n.text.as_str());
+    for word in ["order", "colored", "sweep", "cannot hold"] {
+        assert!(!note.contains(word), "{word} in the note: {note}");
+    }
 }
 
 #[test]
@@ -1010,8 +1016,16 @@ fn the_stats_key_writes_a_row_for_every_frame_of_the_run_so_far() {
     assert!(lines[0].starts_with("frame,time_s,"), "{text}");
     assert_eq!(lines.len(), 1 + 5, "the start and frames 1 to 4:\n{text}");
     assert!(lines[5].starts_with("4,"), "{text}");
-    // The UI does not time frames: the wall time column is empty.
-    assert!(lines[5].ends_with(",30,"), "{text}");
+    // Every frame's wall time (the time its steps took), none for the start.
+    assert!(lines[1].ends_with(",0,"), "{text}");
+    for line in &lines[2..] {
+        let (rest, wall) = line.rsplit_once(',').unwrap();
+        assert!(rest.ends_with(",30"), "{text}");
+        let wall: f64 = wall
+            .parse()
+            .unwrap_or_else(|_| panic!("a wall time: {line}"));
+        assert!(wall > 0.0 && wall < 60.0, "{line}");
+    }
     // A second export goes to a new file, and a reset starts the table again.
     press(&mut app, KeyCode::Char('r'));
     press(&mut app, KeyCode::Char('n'));
@@ -1753,4 +1767,20 @@ fn the_value_prompt_shows_its_whole_hint_at_100_columns() {
     press(&mut app, KeyCode::Enter);
     let shown = screen(&mut app, 100, 30);
     assert!(shown.contains("C-w deletes a word"), "{shown}");
+}
+
+#[test]
+fn a_long_note_wraps_whole_words_at_100_columns() {
+    let mut app = app_with("pinned4", true);
+    let text = "a big cloth (360000 points): it may run slower than real time; the keys answer \
+                at once all the same";
+    app.say(Level::Warn, text);
+    let shown = screen(&mut app, 100, 30);
+    // The note's lines (each quoted in the dump), read as one: every word there, none cut.
+    let folded = shown
+        .replace('"', " ")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert!(folded.contains(text), "{shown}");
 }

@@ -12,7 +12,7 @@
 //! | `lowest_y_m` | the lowest point's height, metres |
 //! | `centre_y_m` | the height of the grid's centre point, metres |
 //! | `steps` | solver steps taken in the frame |
-//! | `wall_s` | wall-clock seconds the frame took (empty in CSV / null in JSON when unknown) |
+//! | `wall_s` | wall-clock seconds the frame took to step (empty in CSV / null in JSON for the start, which took no step) |
 //!
 //! Every column but `wall_s` is the same bit for bit for the same scene, settings and frames;
 //! `wall_s` is last so a comparison can drop it.

@@ -144,12 +144,15 @@ pub fn note_lines(app: &App, width: u16) -> u16 {
         return 1;
     };
     let mark = match n.level {
-        Level::Info => 0,
-        Level::Warn => 2,
-        Level::Error => 7,
+        Level::Info => "",
+        Level::Warn => "! ",
+        Level::Error => "error: ",
     };
-    let text = format!(" {}{}", " ".repeat(mark), n.text);
-    (crate::layout::wrapped_rows(&text, usize::from(width)) as u16).max(1)
+    // NOTE: the mark is counted as the words it is (spaces alone would be dropped between
+    // words), and the line's leading space as a column less: counted short, the last words
+    // of a note that only just fits would be cut.
+    let text = format!("{mark}{}", n.text);
+    (crate::layout::wrapped_rows(&text, usize::from(width).saturating_sub(1)) as u16).max(1)
 }
 
 /// The footer, from the keymap: as many bindings as fit.
