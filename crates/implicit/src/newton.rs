@@ -261,3 +261,97 @@ pub(crate) fn conjugate_gradient(
     s.ap = ap;
     Ok(done)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::topology::Topology;
+    use cloth_mesh::{ClothMesh, GridSpec, SplitMix64, StepParams};
+
+    #[test]
+    fn the_hessian_blocks_are_the_derivative_of_the_gradient_where_nothing_is_clamped() {
+        // A 5 x 4 cloth pinned at both ends of row 0, stretched 15 % along x (past the limit, so
+        // its term acts) and 5 % along z (in tension, short of the limit), with a jitter of 0.5
+        // mm: every spring is in tension, so no transverse term is clamped, and none is within
+        // 1e-4 m of the limit's kink. There `H` must be the exact derivative of the gradient.
+        let mesh = ClothMesh::new(&GridSpec {
+            num_width_points: 5,
+            num_height_points: 4,
+            pinned: vec![(0, 0), (4, 0)],
+            ..GridSpec::default()
+        })
+        .unwrap();
+        let mut rng = SplitMix64::new(5);
+        let x: Vec<Vec3> = mesh
+            .start_positions()
+            .iter()
+            .map(|p| {
+                let mut j = || rng.uniform(-5e-4, 5e-4);
+                Vec3::new(p.x * 1.15 + j(), p.y + j(), p.z * 1.05 + j())
+            })
+            .collect();
+        let params = StepParams::default();
+        let topo = Topology::new(&mesh);
+        for s in mesh.springs() {
+            let len = (x[s.b as usize] - x[s.a as usize]).norm();
+            assert!(len > s.rest, "{s:?} is compressed");
+            assert!(
+                (len - MAX_STRETCH * s.rest).abs() > 1e-4,
+                "{s:?} is at the kink"
+            );
+        }
+        let inertia = vec![500.0; mesh.len()];
+        let mut mu = vec![Vec3::zeros(); mesh.springs().len()];
+        let diag = vec![0.0; topo.free()];
+        let objective = Objective {
+            mesh: &mesh,
+            topo: &topo,
+            params: &params,
+            colliders: &[],
+            inertia: &inertia,
+            y: mesh.start_positions(),
+            x0: mesh.start_positions(),
+            weight: params.gravity,
+            limits: [7000.0, 6000.0, 2000.0],
+            mu: &mut mu,
+            contact_stiffness: &diag,
+            contact_floor: 0.0,
+            pairs: &[],
+            pair_stiffness: 0.0,
+            reach: 0.0,
+        };
+        let mut scratch = NewtonScratch::default();
+        objective.hessian_blocks(&x, &mut scratch);
+        let n = topo.free();
+        let (mut plus, mut minus) = (vec![Vec3::zeros(); n], vec![Vec3::zeros(); n]);
+        let mut column = vec![Vec3::zeros(); n];
+        // Central differences of 1e-7 m: the gradient's third derivatives (~k / L^2, 1e7) leave
+        // a truncation of ~1e-7 N/m, rounding of forces of ~1e3 N ~1e-13 / 2e-7 = 5e-7 N/m; the
+        // smallest true entries (the bending springs' transverse terms, ~50 N/m) are far above
+        // 1e-3 N/m, which passes only a correct Hessian.
+        let step = 1e-7;
+        for f in 0..n {
+            for axis in 0..3 {
+                let mut e = vec![Vec3::zeros(); n];
+                e[f][axis] = 1.0;
+                objective.hessian_times(&scratch, &e, &mut column);
+                let p = topo.free_points[f] as usize;
+                let mut xp = x.clone();
+                xp[p][axis] += step;
+                objective.evaluate(&xp, Some(&mut plus));
+                let mut xm = x.clone();
+                xm[p][axis] -= step;
+                objective.evaluate(&xm, Some(&mut minus));
+                for g in 0..n {
+                    let fd = (plus[g] - minus[g]) / (2.0 * step);
+                    let err = (fd - column[g]).norm();
+                    assert!(
+                        err <= 1e-3,
+                        "H[{g}][{f}.{axis}] = {} but finite differences give {fd}",
+                        column[g]
+                    );
+                }
+            }
+        }
+    }
+}
