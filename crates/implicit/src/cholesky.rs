@@ -288,77 +288,6 @@ impl<T: Precision> Cholesky<T> {
     }
 }
 
-/// A [`Cholesky`] factor in single or double precision, chosen when it is built.
-pub(crate) enum AnyCholesky {
-    /// Stored and computed in `f32`.
-    Single(Cholesky<f32>),
-    /// Stored and computed in `f64`.
-    Double(Cholesky<f64>),
-}
-
-impl std::fmt::Debug for AnyCholesky {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::Single(c) => f.debug_tuple("Single").field(c).finish(),
-            Self::Double(c) => f.debug_tuple("Double").field(c).finish(),
-        }
-    }
-}
-
-impl AnyCholesky {
-    /// [`Cholesky::new`] in single precision when `single`, else in double.
-    ///
-    /// # Errors
-    /// As [`Cholesky::new`].
-    pub(crate) fn new(
-        col_ptr: Vec<usize>,
-        row_idx: Vec<usize>,
-        rhs_cols: usize,
-        single: bool,
-    ) -> Result<Self, String> {
-        Ok(if single {
-            Self::Single(Cholesky::new(col_ptr, row_idx, rhs_cols)?)
-        } else {
-            Self::Double(Cholesky::new(col_ptr, row_idx, rhs_cols)?)
-        })
-    }
-
-    /// Whether the factor is kept in single precision.
-    pub(crate) fn is_single(&self) -> bool {
-        matches!(self, Self::Single(_))
-    }
-
-    /// See [`Cholesky::nnz`].
-    pub(crate) fn nnz(&self) -> usize {
-        match self {
-            Self::Single(c) => c.nnz(),
-            Self::Double(c) => c.nnz(),
-        }
-    }
-
-    /// See [`Cholesky::factorize`].
-    ///
-    /// # Errors
-    /// As [`Cholesky::factorize`].
-    pub(crate) fn factorize(&mut self, values: &[f64], least_pivot: f64) -> Result<(), String> {
-        match self {
-            Self::Single(c) => c.factorize(values, least_pivot),
-            Self::Double(c) => c.factorize(values, least_pivot),
-        }
-    }
-
-    /// See [`Cholesky::solve_in_place`].
-    ///
-    /// # Errors
-    /// As [`Cholesky::solve_in_place`].
-    pub(crate) fn solve_in_place(&mut self, rhs: &mut [f64]) -> Result<(), String> {
-        match self {
-            Self::Single(c) => c.solve_in_place(rhs),
-            Self::Double(c) => c.solve_in_place(rhs),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -370,10 +299,18 @@ mod tests {
         // one: 1e-14 in double; in single (6e-8 each), 1e-5 leaves a factor of a hundred and
         // still fails on any wrong value.
         for (single, tolerance) in [(false, 1e-14), (true, 1e-5)] {
-            let mut c = AnyCholesky::new(vec![0, 2, 4, 5], vec![0, 1, 1, 2, 2], 1, single).unwrap();
-            c.factorize(&[4.0, 1.0, 3.0, 1.0, 2.0], 0.0).unwrap();
+            let (col_ptr, row_idx) = (vec![0, 2, 4, 5], vec![0, 1, 1, 2, 2]);
+            let values = [4.0, 1.0, 3.0, 1.0, 2.0];
             let mut x = vec![1.0, 2.0, 3.0];
-            c.solve_in_place(&mut x).unwrap();
+            if single {
+                let mut c = Cholesky::<f32>::new(col_ptr, row_idx, 1).unwrap();
+                c.factorize(&values, 0.0).unwrap();
+                c.solve_in_place(&mut x).unwrap();
+            } else {
+                let mut c = Cholesky::<f64>::new(col_ptr, row_idx, 1).unwrap();
+                c.factorize(&values, 0.0).unwrap();
+                c.solve_in_place(&mut x).unwrap();
+            }
             let a = [[4.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 2.0]];
             for (row, b) in a.iter().zip([1.0, 2.0, 3.0]) {
                 let ax: f64 = row.iter().zip(&x).map(|(a, x)| a * x).sum();
@@ -391,11 +328,17 @@ mod tests {
         // 1 it becomes 1, the factor is that of [[1, 2], [2, 5]], positive definite, and a
         // solve with it is a descent direction: b . x > 0 for any b.
         for single in [false, true] {
-            let mut c = AnyCholesky::new(vec![0, 2, 3], vec![0, 1, 1], 1, single).unwrap();
-            c.factorize(&[1.0, 2.0, 1.0], 1.0).unwrap();
             let b = [1.0, -1.0];
             let mut x = b.to_vec();
-            c.solve_in_place(&mut x).unwrap();
+            if single {
+                let mut c = Cholesky::<f32>::new(vec![0, 2, 3], vec![0, 1, 1], 1).unwrap();
+                c.factorize(&[1.0, 2.0, 1.0], 1.0).unwrap();
+                c.solve_in_place(&mut x).unwrap();
+            } else {
+                let mut c = Cholesky::<f64>::new(vec![0, 2, 3], vec![0, 1, 1], 1).unwrap();
+                c.factorize(&[1.0, 2.0, 1.0], 1.0).unwrap();
+                c.solve_in_place(&mut x).unwrap();
+            }
             // The factor's matrix is [[1, 2], [2, 5]]: x = [7, -3] exactly (to f32 rounding).
             assert!(
                 (x[0] - 7.0).abs() < 1e-5 && (x[1] + 3.0).abs() < 1e-5,

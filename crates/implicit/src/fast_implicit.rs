@@ -3,6 +3,9 @@
 //! minimisation with a line search (Liu, Bouaziz and Kavan 2017, "Quasi-Newton methods for
 //! real-time simulation of hyperelastic materials").
 //!
+//! The same solver with Newton directions, each a conjugate gradient on the clamped Hessian
+//! preconditioned by the same factor, is [`ImplicitEuler`] (`implicit`).
+//!
 //! # Method
 //!
 //! The step minimises the incremental potential
@@ -112,8 +115,8 @@
 //! energy is not convex (a compressed spring), so this is an argument rather than a proof, and a
 //! run that diverges all the same is stopped by the front ends' divergence guard. With few
 //! iterations the solver under-resolves stiff springs, which makes the cloth look softer and
-//! more damped. At convergence the step equals [`ImplicitEuler`]'s up to the form of the limit
-//! and of the contacts.
+//! more damped. At convergence the step equals [`ImplicitEuler`]'s, which minimises the same
+//! potential by Newton directions over the same factor.
 //!
 //! # Collisions
 //!
@@ -169,6 +172,7 @@ use crate::commit::{hold_still, predict};
 use crate::contact::{Contacts, touches};
 use crate::lbfgs::{Lbfgs, Problem};
 use crate::memory::{Allocation, try_filled};
+use crate::newton::NewtonScratch;
 use crate::objective::{CONTACT_GAP, Objective, StepProblem, surface_distance};
 use crate::self_contact::SelfContacts;
 use crate::topology::{NONE, Topology};
@@ -286,6 +290,20 @@ pub struct FastImplicit {
     /// The pairs of points self-collision acts on in the current step.
     self_contacts: SelfContacts,
     lbfgs: Lbfgs,
+    /// How each iteration's direction is found.
+    method: Method,
+    /// Newton's Hessian blocks and conjugate-gradient vectors (empty for L-BFGS).
+    newton: NewtonScratch,
+}
+
+/// How an iteration of the step's minimisation finds its direction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Method {
+    /// L-BFGS over the prefactored matrix (`fast-implicit`).
+    Lbfgs,
+    /// Newton: the conjugate gradient on the clamped Hessian, preconditioned by the
+    /// prefactored matrix, at most this many iterations per direction (`implicit`).
+    Newton(u32),
 }
 
 impl Default for FastImplicit {
@@ -358,7 +376,21 @@ impl FastImplicit {
             hash: SpatialHash::default(),
             self_contacts: SelfContacts::default(),
             lbfgs: Lbfgs::default(),
+            method: Method::Lbfgs,
+            newton: NewtonScratch::default(),
         }
+    }
+
+    /// This solver with each iteration's direction found by `method`.
+    #[must_use]
+    pub(crate) fn with_method(mut self, method: Method) -> Self {
+        self.method = method;
+        self
+    }
+
+    /// The tolerance, m: iterations stop once a full step moves no point farther.
+    pub(crate) fn tolerance(&self) -> f64 {
+        self.tolerance
     }
 
     /// Iterations per step, at most.
@@ -529,14 +561,16 @@ impl FastImplicit {
         params: &StepParams,
         inertia: f64,
     ) -> Result<(), SolveError> {
+        let name = self.name();
         if !self.system.as_ref().is_some_and(|s| s.topo.matches(mesh)) {
             self.system = None;
             self.mu = Vec::new();
             let topo = Topology::new(mesh);
             let (col_ptr, row_idx) = topo.scalar_pattern();
-            let chol = Cholesky::<f64>::new(col_ptr.clone(), row_idx, 3).map_err(method_error)?;
-            let values =
-                try_filled(chol.nnz(), 0.0, "the fast-implicit matrix").map_err(alloc_error)?;
+            let chol =
+                Cholesky::<f64>::new(col_ptr.clone(), row_idx, 3).map_err(method_error(name))?;
+            let values = try_filled(chol.nnz(), 0.0, "the fast-implicit matrix")
+                .map_err(alloc_error(name))?;
             self.system = Some(System {
                 topo,
                 chol,
@@ -553,10 +587,10 @@ impl FastImplicit {
                 Vec3::zeros(),
                 "the stretch-limit multipliers",
             )
-            .map_err(alloc_error)?;
+            .map_err(alloc_error(name))?;
         }
         let Some(sys) = self.system.as_mut() else {
-            return Err(method_error("no linear system was built".to_owned()));
+            return Err(method_error(name)("no linear system was built".to_owned()));
         };
         let key = MatrixKey {
             inertia: inertia.to_bits(),
@@ -602,7 +636,9 @@ impl FastImplicit {
                 v[sys.col_ptr[fa.min(fb) as usize] + 1 + slot as usize] -= k;
             }
         }
-        sys.chol.factorize(&sys.values, 0.0).map_err(method_error)?;
+        sys.chol
+            .factorize(&sys.values, 0.0)
+            .map_err(method_error(name))?;
         sys.diag.clear();
         sys.diag
             .extend(sys.col_ptr[..topo.free()].iter().map(|&c| sys.values[c]));
@@ -622,20 +658,20 @@ fn spring_weight(params: &StepParams, kind: SpringKind, inertia: f64, level: u32
     }
 }
 
-fn method_error(reason: String) -> SolveError {
-    SolveError::Method {
-        solver: "fast-implicit",
-        reason,
-    }
+fn method_error(solver: &'static str) -> impl Fn(String) -> SolveError {
+    move |reason| SolveError::Method { solver, reason }
 }
 
-fn alloc_error(a: Allocation) -> SolveError {
-    method_error(a.to_string())
+fn alloc_error(solver: &'static str) -> impl Fn(Allocation) -> SolveError {
+    move |a| method_error(solver)(a.to_string())
 }
 
 impl Solver for FastImplicit {
     fn name(&self) -> &'static str {
-        "fast-implicit"
+        match self.method {
+            Method::Lbfgs => "fast-implicit",
+            Method::Newton(_) => "implicit",
+        }
     }
 
     fn reset(&mut self) {
@@ -652,6 +688,7 @@ impl Solver for FastImplicit {
         state: &mut ClothState,
     ) -> Result<StepReport, SolveError> {
         params.validate()?;
+        let name = self.name();
         let h = params.dt();
         let c = params.drag_rate();
         let mass = mesh.point_mass(params.density);
@@ -690,8 +727,14 @@ impl Solver for FastImplicit {
         );
         self.prepare(mesh, params, inertia)?;
         let max_iterations = self.iterations;
+        // Newton's tolerance is per frame, so that its velocity error does not grow with the
+        // steps per frame.
+        let tolerance = match self.method {
+            Method::Lbfgs => self.tolerance,
+            Method::Newton(_) => self.tolerance / f64::from(params.steps_per_frame),
+        };
         let Some(sys) = self.system.as_mut() else {
-            return Err(method_error("no linear system was built".to_owned()));
+            return Err(method_error(name)("no linear system was built".to_owned()));
         };
         let weight = params.gravity * mass;
         if !params.stretch_limit {
@@ -754,6 +797,10 @@ impl Solver for FastImplicit {
             },
             chol,
             rhs: &mut self.rhs,
+            newton: match self.method {
+                Method::Lbfgs => None,
+                Method::Newton(cg) => Some((&mut self.newton, cg, tolerance)),
+            },
         };
         // NOTE: the minimisation only ever lowers the incremental potential from its start, so
         // it starts from whichever of the prediction and the step's start has the lower one:
@@ -768,14 +815,8 @@ impl Solver for FastImplicit {
         }
         let outcome = self
             .lbfgs
-            .minimise(
-                &mut self.x,
-                free,
-                max_iterations,
-                self.tolerance,
-                &mut problem,
-            )
-            .map_err(method_error)?;
+            .minimise(&mut self.x, free, max_iterations, tolerance, &mut problem)
+            .map_err(method_error(name))?;
         let iterations = outcome.iterations;
 
         commit_in_step(mesh, colliders, state, free, &self.x, h)?;

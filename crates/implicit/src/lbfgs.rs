@@ -11,6 +11,14 @@ use cloth_mesh::Vec3;
 /// slope promises.
 const ARMIJO: f64 = 1e-4;
 
+/// The relative rounding of the objective that a step's decrease may hide, for the
+/// approximate Wolfe condition of Newton's line search.
+const ROUNDING: f64 = 1e-12;
+
+/// The approximate Wolfe condition's bound on the slope at the trial, over the slope at the
+/// start (`2 delta - 1` with Hager and Zhang's `delta = 0.1`, negated).
+const APPROXIMATE_WOLFE: f64 = 0.8;
+
 /// Halvings of the step the line search tries before it gives up on a direction.
 const MAX_HALVINGS: u32 = 30;
 
@@ -25,6 +33,26 @@ pub(crate) trait Problem {
     /// # Errors
     /// A message when the solve fails.
     fn precondition(&mut self, q: &mut [Vec3]) -> Result<(), String>;
+
+    /// Writes a Newton direction at `x` (with the objective's gradient `grad` there) into
+    /// `direction` and returns true, or returns false to have the iteration take the L-BFGS
+    /// direction instead (the default).
+    ///
+    /// # Errors
+    /// A message when a solve fails.
+    fn newton_direction(
+        &mut self,
+        _x: &[Vec3],
+        _grad: &[Vec3],
+        _direction: &mut [Vec3],
+    ) -> Result<bool, String> {
+        Ok(false)
+    }
+
+    /// Whether [`Problem::update`] changes the objective between iterations.
+    fn has_multipliers(&self) -> bool {
+        false
+    }
 
     /// Called after each accepted iteration, at its result `x` with the objective's `value`
     /// and gradient `grad` there: may change the objective (a multiplier update), bringing
@@ -84,8 +112,9 @@ impl Lbfgs {
     /// Minimises `objective` over the free points `free` of `x` (whose other points stay),
     /// from `x`, in at most `max_iterations` iterations: each a quasi-Newton direction whose
     /// initial inverse Hessian is `solve` (which overwrites its argument with the constant
-    /// matrix's inverse times it), and a step along it halved until the objective falls by the
-    /// Armijo share of the slope. Stops once an iteration's full step (not halved) moves no
+    /// matrix's inverse times it), or the problem's Newton direction where it gives one
+    /// ([`Problem::newton_direction`]; no curvature pairs are then kept), and a step along it
+    /// halved until the objective falls by the Armijo share of the slope. Stops once an iteration's full step (not halved) moves no
     /// point farther than `tolerance`, or once no step along a descent direction lowers the
     /// objective in floating point.
     ///
@@ -130,7 +159,10 @@ impl Lbfgs {
         let mut satisfied = true;
         while outcome.iterations < max_iterations {
             outcome.iterations += 1;
-            self.two_loop(problem)?;
+            let newton = problem.newton_direction(x, &self.grad, &mut self.direction)?;
+            if !newton {
+                self.two_loop(problem)?;
+            }
             let mut slope = dot(&self.direction, &self.grad);
             if slope.is_nan() || slope >= 0.0 {
                 // The curvature pairs no longer describe a convex model here: start afresh.
@@ -159,7 +191,26 @@ impl Lbfgs {
                     self.trial[p as usize] = x[p as usize] + d * step;
                 }
                 let v = problem.evaluate(&self.trial, Some(&mut self.trial_grad));
-                if last || v <= value + ARMIJO * step * slope {
+                // NOTE: near a minimum a Newton step's decrease falls below the objective's
+                // rounding (a spring's energy is summed from lengths rounded at 1e-16 of a
+                // metre) before the step falls below a tight tolerance; there the slope along
+                // the direction at the trial, which rounding does not hide, decides instead
+                // (Hager and Zhang's approximate Wolfe condition), so that the iterations still
+                // reach the minimum. A rise it lets through is within rounding of the value.
+                let rounding = ROUNDING * value.abs();
+                // NOTE: with multipliers that change the objective after every iteration, a
+                // rise within rounding lets the iterations circle; there the trial must not rise.
+                let allowed = if problem.has_multipliers() {
+                    0.0
+                } else {
+                    rounding
+                };
+                let flat = newton
+                    && satisfied
+                    && v <= value + allowed
+                    && -step * slope <= rounding
+                    && dot(&self.direction, &self.trial_grad) <= APPROXIMATE_WOLFE * -slope;
+                if last || flat || v <= value + ARMIJO * step * slope {
                     accepted = Some(v);
                     break;
                 }
@@ -172,6 +223,21 @@ impl Lbfgs {
                 outcome.converged = satisfied;
                 break;
             };
+            if newton {
+                for &p in free {
+                    x[p as usize] = self.trial[p as usize];
+                }
+                std::mem::swap(&mut self.grad, &mut self.trial_grad);
+                value = v;
+                outcome.residual = full * step;
+                let update = problem.update(x, &mut value, &mut self.grad);
+                satisfied = update.satisfied;
+                if last && satisfied {
+                    outcome.converged = true;
+                    break;
+                }
+                continue;
+            }
             // The curvature pair of this step.
             let mut pair = self.spare.pop().unwrap_or_else(|| Pair {
                 s: Vec::new(),

@@ -2,9 +2,12 @@
 //!
 //! Two solvers implement [`cloth_solver::Solver`]:
 //!
-//! - [`ImplicitEuler`] (`implicit`): backward Euler, each step minimising the incremental
-//!   potential by Newton's method with a line search. Unconditionally stable, accurate to first
-//!   order in the step; for stiff cloths and one step per frame.
+//! - [`ImplicitEuler`] (`implicit`): backward Euler, each step minimising the same incremental
+//!   potential as `fast-implicit` by Newton's method with a line search: each direction a
+//!   conjugate gradient on the true Hessian (its indefinite parts clamped), preconditioned by
+//!   the same constant prefactored matrix, which no motion of the cloth refactors.
+//!   Unconditionally stable, accurate to first order in the step; for stiff cloths and one
+//!   step per frame.
 //! - [`FastImplicit`] (`fast-implicit`): the same backward-Euler step, minimised by L-BFGS with
 //!   a line search over one constant, prefactored matrix (Liu et al. 2013's projective-dynamics
 //!   matrix, as Liu, Bouaziz and Kavan 2017 use it), with contact and self-collision as
@@ -19,10 +22,9 @@
 //! ([`cloth_solver::StepParams`]): the damping becomes the drag rate
 //! [`StepParams::drag_rate`](cloth_solver::StepParams::drag_rate), so it does not change with
 //! the step (100 % is an infinite drag: the cloth holds still); the 10 % stretch limit is part
-//! of the minimisation rather than the course's post-step sweep (a projection in the local step
-//! for the fast solver, a stiff one-sided spring solved by the method of multipliers for
-//! Newton; each module says how). Both own only caches and scratch memory (and Newton the
-//! limit's multipliers, which a new solver starts at zero), so a live swap with
+//! of the minimisation rather than the course's post-step sweep (an augmented term with a
+//! multiplier per spring, ADMM; `fast_implicit.rs` says how). Both own only caches and scratch
+//! memory (and the limit's multipliers, which a new solver starts at zero), so a live swap with
 //! [`cloth_solver::Verlet`] keeps the cloth's motion; see [`retime_velocity`] for swaps that
 //! change the step. Each states the memory it needs for a mesh (`memory_estimate`) and reports
 //! a cloth too large for the machine as an error instead of aborting.
@@ -55,16 +57,12 @@
 //! directions of a resting point, as the course's friction scales a point's whole
 //! displacement; the collision then removes the part that went into the object.
 //!
-//! Newton then lets the collision objects push points out of them after the solve, as the
-//! course's collisions do: a resting point, whose friction the step has had, without friction;
-//! a point that reaches an object during the step with one step's drag on its displacement, `1
-//! / (1 + c_f h)`, as the course applies its friction to the step in which a point crosses.
-//! The fast solver puts the objects and self-collision into the minimisation instead, and the
-//! drag on every point whose prediction reaches an object (its module doc says how and why).
+//! Both solvers put the objects and self-collision into the minimisation, and the drag on
+//! every point whose prediction reaches an object (`fast_implicit.rs` says how and why).
 //!
-//! # Contact inside the fast solver's step
+//! # Contact inside the step
 //!
-//! [`FastImplicit`] minimises, in each step, the backward-Euler incremental potential plus one
+//! Both solvers minimise, in each step, the backward-Euler incremental potential plus one
 //! one-sided penalty per free point and collision object (`k/2 min(0, s - delta)^2`, `s` the
 //! point's distance to the surface on the side it starts the step on) and one per pair of
 //! points closer than twice the thickness at the step's start or at their predictions (`k/2
@@ -79,7 +77,9 @@
 //! object onto its surface and removes its velocity into the object: it takes kinetic energy
 //! out. The stretch limit's multiplier update is the one part of the step that changes the
 //! potential between iterations (the module documentation says why that is an argument, not a
-//! proof).
+//! proof). [`FastImplicit`] takes L-BFGS directions over the prefactored matrix,
+//! [`ImplicitEuler`] Newton directions preconditioned by it; both only accept steps that lower
+//! the potential.
 
 mod cholesky;
 mod commit;
@@ -89,17 +89,15 @@ mod fast_implicit;
 mod implicit_euler;
 mod lbfgs;
 mod memory;
+mod newton;
 mod objective;
 mod retime;
 mod self_contact;
-mod spring_energy;
 mod topology;
 
 pub use contact::{CONTACT_DISTANCE, friction_rate, retime_friction};
 pub use fast_implicit::{DEFAULT_ITERATIONS, FAST_TOLERANCE, FastImplicit, limit_weight};
 pub use implicit_euler::{
-    ImplicitEuler, LIMIT_TOLERANCE, MAX_LIMIT_UPDATES, MAX_NEWTON_ITERATIONS, MAX_PCG_ITERATIONS,
-    NEWTON_TOLERANCE, REFACTOR_BUDGET,
+    ImplicitEuler, MAX_NEWTON_ITERATIONS, MAX_PCG_ITERATIONS, NEWTON_TOLERANCE,
 };
 pub use retime::retime_velocity;
-pub use spring_energy::{LIMIT_OVERSHOOT, limiter_stiffness};

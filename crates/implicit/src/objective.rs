@@ -5,6 +5,7 @@ use cloth_mesh::{ClothMesh, Collider, MAX_STRETCH, StepParams, Vec3};
 
 use crate::cholesky::Cholesky;
 use crate::lbfgs::{Problem, Update};
+use crate::newton::{NewtonScratch, conjugate_gradient};
 use crate::topology::{NONE, Topology};
 
 /// The stretch limit's multipliers are updated until no spring is over the limit by more than
@@ -198,6 +199,25 @@ pub(crate) struct StepProblem<'a> {
     pub(crate) chol: &'a mut Cholesky,
     /// Scratch for the solves, three coordinates of each free point (axis-major).
     pub(crate) rhs: &'a mut Vec<f64>,
+    /// For Newton's directions: the Hessian's blocks and the conjugate gradient's vectors, and
+    /// its iterations per direction at most and the step's tolerance, m; `None` for L-BFGS.
+    pub(crate) newton: Option<(&'a mut NewtonScratch, u32, f64)>,
+}
+
+/// Overwrites `q` (three coordinates per free point) with `chol`'s inverse times it.
+fn solve(chol: &mut Cholesky, rhs: &mut Vec<f64>, q: &mut [Vec3]) -> Result<(), String> {
+    let n = q.len();
+    rhs.resize(3 * n, 0.0);
+    for (f, v) in q.iter().enumerate() {
+        for axis in 0..3 {
+            rhs[axis * n + f] = v[axis];
+        }
+    }
+    chol.solve_in_place(rhs)?;
+    for (f, v) in q.iter_mut().enumerate() {
+        *v = Vec3::new(rhs[f], rhs[n + f], rhs[2 * n + f]);
+    }
+    Ok(())
 }
 
 impl Problem for StepProblem<'_> {
@@ -206,18 +226,42 @@ impl Problem for StepProblem<'_> {
     }
 
     fn precondition(&mut self, q: &mut [Vec3]) -> Result<(), String> {
-        let n = q.len();
-        self.rhs.resize(3 * n, 0.0);
-        for (f, v) in q.iter().enumerate() {
-            for axis in 0..3 {
-                self.rhs[axis * n + f] = v[axis];
-            }
-        }
-        self.chol.solve_in_place(self.rhs)?;
-        for (f, v) in q.iter_mut().enumerate() {
-            *v = Vec3::new(self.rhs[f], self.rhs[n + f], self.rhs[2 * n + f]);
-        }
-        Ok(())
+        solve(self.chol, self.rhs, q)
+    }
+
+    fn has_multipliers(&self) -> bool {
+        self.objective.limits.iter().any(|&w| w > 0.0)
+    }
+
+    fn newton_direction(
+        &mut self,
+        x: &[Vec3],
+        grad: &[Vec3],
+        direction: &mut [Vec3],
+    ) -> Result<bool, String> {
+        let Some((scratch, max_iterations, tolerance)) = self.newton.as_mut() else {
+            return Ok(false);
+        };
+        self.objective.hessian_blocks(x, scratch);
+        let least_inertia = self
+            .objective
+            .topo
+            .free_points
+            .iter()
+            .map(|&p| self.objective.inertia[p as usize])
+            .fold(f64::INFINITY, f64::min);
+        let (chol, rhs) = (&mut *self.chol, &mut *self.rhs);
+        let done = conjugate_gradient(
+            &self.objective,
+            scratch,
+            grad,
+            direction,
+            *max_iterations,
+            least_inertia,
+            *tolerance,
+            |q| solve(chol, rhs, q),
+        )?;
+        Ok(done > 0)
     }
 
     /// The scaled multipliers' ADMM update (`u <- d + u - proj(d + u)`, the ball `|q| <= 1.1

@@ -127,26 +127,6 @@ impl Topology {
         }
         (col_ptr, row_idx)
     }
-
-    /// The 3x3-block lower-triangular pattern (three unknowns per free point): column `3f + c`
-    /// holds rows `3f + c ..= 3f + 2` of the diagonal block, then the three rows of each higher
-    /// neighbour's block in order.
-    pub(crate) fn block_pattern(&self) -> (Vec<usize>, Vec<usize>) {
-        let n = self.free();
-        let mut col_ptr = Vec::with_capacity(3 * n + 1);
-        let mut row_idx = Vec::with_capacity(6 * n + 9 * self.neighbours.len());
-        col_ptr.push(0);
-        for f in 0..n {
-            for c in 0..3 {
-                row_idx.extend((c..3).map(|r| 3 * f + r));
-                for &q in self.upper_neighbours(f) {
-                    row_idx.extend((0..3).map(|r| 3 * q as usize + r));
-                }
-                col_ptr.push(row_idx.len());
-            }
-        }
-        (col_ptr, row_idx)
-    }
 }
 
 #[cfg(test)]
@@ -171,10 +151,10 @@ mod tests {
             let pinned_end = mesh.pinned()[s.a as usize] || mesh.pinned()[s.b as usize];
             assert_eq!(slot == NONE, pinned_end, "{s:?}");
         }
-        let (col_ptr, row_idx) = t.block_pattern();
-        assert_eq!(col_ptr.len(), 31);
+        let (col_ptr, row_idx) = t.scalar_pattern();
+        assert_eq!(col_ptr.len(), 11);
         // Every stored entry is in the lower triangle, rows sorted within a column.
-        for j in 0..30 {
+        for j in 0..10 {
             let rows = &row_idx[col_ptr[j]..col_ptr[j + 1]];
             assert!(rows.iter().all(|&r| r >= j));
             assert!(rows.windows(2).all(|w| w[0] < w[1]));

@@ -3,7 +3,7 @@
 
 mod common;
 
-use cloth_implicit::{FastImplicit, ImplicitEuler, limiter_stiffness, retime_velocity};
+use cloth_implicit::{FastImplicit, ImplicitEuler, retime_velocity};
 use cloth_mesh::{ClothMesh, ClothState, Vec3};
 use cloth_solver::{
     MAX_STRETCH, SolveError, Solver, StepParams, Verlet, advance_frame, max_stretch_ratio,
@@ -53,7 +53,17 @@ fn verlet_rest(mesh: &ClothMesh, params: &StepParams) -> (ClothState, ClothState
 /// other) and which one a run reaches depends on its path; backward Euler at 0.25 s steps takes
 /// another path than Verlet at 1/2700 s. After 1 s both are in the same basin, so the comparison
 /// is between fixed points, which is what this check is about.
-fn implicit_rest(mesh: &ClothMesh, params: &StepParams, start: &ClothState) -> ClothState {
+///
+/// `slack` raises the iterations a step may take (Newton's and the conjugate gradient's) to
+/// what a slack edge needs: at a quarter-second step the factor overstates its stiffness
+/// about a hundred thousand times, and the default iterations converge it over hours of
+/// simulated time rather than in the run.
+fn implicit_rest(
+    mesh: &ClothMesh,
+    params: &StepParams,
+    start: &ClothState,
+    slack: bool,
+) -> ClothState {
     let big = StepParams {
         steps_per_frame: 1,
         frames_per_sec: 4.0,
@@ -61,15 +71,12 @@ fn implicit_rest(mesh: &ClothMesh, params: &StepParams, start: &ClothState) -> C
     };
     let mut state = start.clone();
     retime_velocity(&mut state, params.dt(), big.dt());
-    let (steps, moved) = settle(
-        &mut ImplicitEuler::with_tolerance(1e-11),
-        mesh,
-        &big,
-        &mut state,
-        1e-11,
-        500,
-    )
-    .expect("the implicit solver does not fail");
+    let mut solver = ImplicitEuler::with_tolerance(1e-11);
+    if slack {
+        solver = solver.with_iterations(50, 200);
+    }
+    let (steps, moved) = settle(&mut solver, mesh, &big, &mut state, 1e-11, 500)
+        .expect("the implicit solver does not fail");
     assert!(
         moved <= 1e-11,
         "implicit still moving {moved:e} m/step after {steps} steps"
@@ -97,29 +104,54 @@ fn without_the_limit_implicit_and_verlet_rest_at_the_same_equilibrium() {
     // Both rest states solve grad E = 0 (Verlet's fixed point has zero net force; backward
     // Euler's has x = y, hence grad E = 0), so they may differ only by how far each run is
     // from that point: ~3e-9 m for Verlet (see verlet_rest) and ~1e-11 m for the implicit run.
-    // A bound of 1e-6 m leaves room for nothing else.
-    //
-    // NOTE: pinned2 has a very soft mode (the slack top edge between the pins, w ~ 0.03 rad/s
-    // at ks = 1e5): overdamped, it decays at w^2 / c ~ 1e-4 1/s, so Verlet's "settled" state
+    // A bound of 1e-6 m leaves room for nothing else. The implicit rest state is also checked
+    // to be Verlet's fixed point: Verlet released from it moves no point by 1e-6 m in 2 s (a
+    // state 1e-6 m off along any mode faster than 1 rad/s would move by about that much).
+    let mesh = pinned4(50);
+    for ks in [1e5, 5000.0] {
+        let params = static_params(ks, false);
+        let (start, v) = verlet_rest(&mesh, &params);
+        let i = implicit_rest(&mesh, &params, &start, false);
+        let d = max_distance(&v.positions, &i.positions);
+        let drift = verlet_drift_from(&mesh, &params, &i);
+        eprintln!(
+            "pinned4 ks={ks}: |verlet - implicit| = {d:.3e} m, Verlet's drift from the \
+             implicit rest state {drift:.3e} m"
+        );
+        assert!(drift < 1e-6, "ks={ks}: Verlet drifts {drift:e} m");
+        assert!(d < 1e-6, "ks={ks}: rest states differ by {d:e} m");
+    }
+}
+
+#[test]
+#[ignore = "long: pinned2's slack edge at 200 conjugate-gradient iterations a direction (release: about two minutes)"]
+fn pinned2s_implicit_rest_state_is_verlets_fixed_point_with_and_without_the_limit() {
+    // pinned2 has a very soft mode (the slack top edge between the pins, w ~ 0.03 rad/s at
+    // ks = 1e5): overdamped, it decays at w^2 / c ~ 1e-4 1/s, so Verlet's "settled" state
     // (1e-10 m per frame) is still 7e-5 m (ks = 1e5) and 4e-4 m (ks = 5000) from the
-    // equilibrium, and no test can wait the hours it needs; for pinned2 the fixed-point check
-    // below is the comparison. For every case the implicit rest state is therefore also checked to be
-    // Verlet's fixed point: Verlet released from it moves no point by 1e-6 m in 2 s (a state
-    // 1e-6 m off along any mode faster than 1 rad/s would move by about that much).
-    for (name, mesh) in [("pinned4", pinned4(50)), ("pinned2", pinned2(50))] {
+    // equilibrium, and no test can wait the hours it needs. The comparison is therefore the
+    // fixed-point check: Verlet released from the implicit rest state moves no point by 1e-6 m
+    // in 2 s (a state 1e-6 m off along any mode faster than 1 rad/s would move by about that
+    // much). With the limit on, the rest state also holds it: no spring 0.1 % of its rest
+    // length past it.
+    let mesh = pinned2(50);
+    for limit in [false, true] {
         for ks in [1e5, 5000.0] {
-            let params = static_params(ks, false);
-            let (start, v) = verlet_rest(&mesh, &params);
-            let i = implicit_rest(&mesh, &params, &start);
-            let d = max_distance(&v.positions, &i.positions);
+            let params = static_params(ks, limit);
+            let (start, _) = verlet_rest(&mesh, &params);
+            let i = implicit_rest(&mesh, &params, &start, true);
             let drift = verlet_drift_from(&mesh, &params, &i);
+            let ratio = max_stretch_ratio(&mesh, &i);
             eprintln!(
-                "{name} ks={ks}: |verlet - implicit| = {d:.3e} m, Verlet's drift from the \
-                 implicit rest state {drift:.3e} m"
+                "pinned2 ks={ks} limit {limit}: Verlet's drift from the implicit rest state \
+                 {drift:.3e} m, stretch ratio {ratio:.5}"
             );
-            assert!(drift < 1e-6, "{name} ks={ks}: Verlet drifts {drift:e} m");
-            if name != "pinned2" {
-                assert!(d < 1e-6, "{name} ks={ks}: rest states differ by {d:e} m");
+            assert!(
+                drift < 1e-6,
+                "ks={ks} limit {limit}: Verlet drifts {drift:e} m"
+            );
+            if limit {
+                assert!(ratio < MAX_STRETCH + 1e-3, "ks={ks}: stretch ratio {ratio}");
             }
         }
     }
@@ -128,19 +160,22 @@ fn without_the_limit_implicit_and_verlet_rest_at_the_same_equilibrium() {
 #[test]
 fn with_the_limit_rest_states_agree_within_the_limiters_give() {
     // Both rest states minimise E with every spring held near 1.1 rest where the limit binds;
-    // they differ only in how exactly each holds it. The implicit one lets a binding spring
-    // exceed 1.1 rest by its tension over the limiter stiffness (T / k_lim); Verlet's is the
+    // they differ only in how exactly each holds it. The implicit one holds a binding spring at
+    // 1.1 rest by its multiplier, up to what the multipliers' iteration leaves; Verlet's is the
     // fixed point of one Provot sweep per step, which leaves each binding spring off 1.1 rest
     // by the part of a step's stretch (F dt^2 / m) that the sweep's later corrections undo. A
     // point's offset is the sum of these length errors along the chain of binding springs that
     // ties it to a pin, at most nw + nh - 2 springs on the grid, so
     // |x_verlet - x_implicit| <= (nw + nh - 2) max_binding (|l_v - 1.1 L| + |l_i - 1.1 L|).
-    // The figure is printed next to the bound.
-    for (name, mesh) in [("pinned4", pinned4(50)), ("pinned2", pinned2(50))] {
+    // A binding spring is one the implicit state holds at the limit: within a millionth of its
+    // rest length of it, or past it (the multipliers leave it on either side by rounding). The
+    // figure is printed next to the bound. pinned2's slack edge is compared by the fixed-point
+    // check of the long test above.
+    for (name, mesh) in [("pinned4", pinned4(50))] {
         for ks in [1e5, 5000.0] {
             let params = static_params(ks, true);
             let (start, v) = verlet_rest(&mesh, &params);
-            let i = implicit_rest(&mesh, &params, &start);
+            let i = implicit_rest(&mesh, &params, &start, true);
             let ratio = max_stretch_ratio(&mesh, &i);
             let len = |st: &ClothState, s: &cloth_mesh::Spring| {
                 (st.positions[s.a as usize] - st.positions[s.b as usize]).norm()
@@ -148,23 +183,25 @@ fn with_the_limit_rest_states_agree_within_the_limiters_give() {
             let worst = mesh
                 .springs()
                 .iter()
-                .filter(|s| len(&i, s) > MAX_STRETCH * s.rest)
+                .filter(|s| len(&i, s) >= (MAX_STRETCH - 1e-6) * s.rest)
                 .map(|s| {
                     let limit = MAX_STRETCH * s.rest;
                     (len(&v, s) - limit).abs() + (len(&i, s) - limit).abs()
                 })
                 .fold(0.0, f64::max);
-            let bound = (mesh.nw() + mesh.nh() - 2) as f64 * worst;
+            // Plus how far each run may still be from its own fixed point: 3.4e-9 m for
+            // Verlet's (see verlet_rest), 1e-11 m for the implicit one. Where both hold every
+            // binding spring at 1.1 rest to rounding, that is all that separates them.
+            let bound = (mesh.nw() + mesh.nh() - 2) as f64 * worst + 3.4e-9 + 1e-11;
             let d = max_distance(&v.positions, &i.positions);
             eprintln!(
                 "{name} ks={ks}: |verlet - implicit| = {d:.3e} m, bound {bound:.3e} m \
                  (largest binding-length error {worst:.3e} m, implicit stretch ratio \
-                 {ratio:.5}, Verlet's {:.5}, k_lim {:.3e} N/m)",
+                 {ratio:.5}, Verlet's {:.5})",
                 max_stretch_ratio(&mesh, &v),
-                limiter_stiffness(&mesh, &params)
             );
             assert!(d <= bound, "{name} ks={ks}: {d:e} m > {bound:e} m");
-            // The limiter's own promise: under 0.1 % of the shortest rest length past 1.1 rest.
+            // Converged multipliers hold the limit: no spring 0.1 % of its rest length past it.
             assert!(
                 ratio < MAX_STRETCH + 1e-3,
                 "{name} ks={ks}: stretch ratio {ratio}"
@@ -346,9 +383,9 @@ fn without_the_limit_fast_implicit_holds_verlets_equilibrium() {
 #[test]
 fn with_the_limit_the_pinned4_centre_settles_within_5_mm_of_verlets() {
     // The course's pinned4 at its defaults hangs on its stretch limit: most springs from the
-    // corners bind. The forms of the limit hold a binding spring at different lengths:
-    // fast-implicit's exact constraint at 1.1 rest once its iterations converge, the Newton
-    // solver's penalty at most 0.1 % of a spring over it (2e-5 m), and Verlet's sweep, which
+    // corners bind. The forms of the limit hold a binding spring at different lengths: the
+    // implicit solvers' exact constraint at 1.1 rest once their multipliers converge (both hold
+    // it the same way, to within what each step's iterations leave), and Verlet's sweep, which
     // corrects one spring after another so that later corrections stretch earlier springs
     // again, a few tenths of a percent of rest over it at rest (its largest ratio is printed).
     // The centre hangs from a chain of about 35 binding springs from each corner (the
