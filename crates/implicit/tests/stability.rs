@@ -313,10 +313,12 @@ fn both_take_over_from_verlet_mid_fall_with_the_springs_past_the_limit() {
     }
 }
 
+// NOTE: a known failure, as the check's list of expected failures records the pinned4 swap at
+// frame 40: taken over from Verlet's stretched state at frame 28, the limit's multipliers let
+// the cloth spring back to 31 J by the eighth frame. The day it passes, this test fails and
+// the attribute goes, as a listed measure that passes fails the check.
 #[test]
-#[ignore = "fails, as the check's pinned4 swap at frame 40 does: taken over from Verlet's \
-            stretched state at frame 28, the limit's multipliers let the cloth spring back to \
-            31 J by the eighth frame"]
+#[should_panic(expected = "J above")]
 fn implicit_takes_over_near_the_bottom_of_the_fall_without_gaining_energy_the_fall_does_not_give() {
     // Around frame 30 Verlet's pinned4 is caught by its springs at the bottom of its fall and
     // rebounds, its kinetic energy never above 28.5 J from there on, with the course's sweep
