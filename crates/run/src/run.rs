@@ -220,6 +220,8 @@ pub struct Run {
     pub(crate) guard: Guard,
     /// Whether the divergence guard judges each frame (see [`Run::set_guarded`]).
     guarded: bool,
+    /// Whether this copy steps the cloth (false once [`Run::release_solver`] gave it up).
+    stepping: bool,
     recording: bool,
 }
 
@@ -288,6 +290,7 @@ impl Run {
             touched: Vec::new(),
             guard: Guard::new(),
             guarded: true,
+            stepping: true,
             recording: true,
         };
         sim.sample();
@@ -418,11 +421,13 @@ impl Run {
     /// building the solver, which is then dropped.
     pub fn release_solver(&mut self) {
         self.solver = None;
+        self.stepping = false;
     }
 
-    /// Whether this copy holds a solver (see [`Self::release_solver`]).
+    /// Whether this copy steps the cloth: it holds a solver, or lost it to a change of the
+    /// cloth's topology its solver could not be built for (see [`Self::release_solver`]).
     pub fn has_solver(&self) -> bool {
-        self.solver.is_some()
+        self.stepping
     }
 
     /// Whether the steps per frame are the ones the scene gives the active solver (its
@@ -683,9 +688,12 @@ impl Run {
     /// options it has; the state carries the motion. A solver that cannot be built for the new
     /// mesh stops the run with the reason.
     fn rebuild_solver(&mut self) {
-        if self.solver.is_none() {
+        if !self.stepping {
             return;
         }
+        // NOTE: the old solver goes before the new one is built, so a big cloth's scratch (a
+        // factorisation) is never held twice.
+        self.solver = None;
         match self.choice.build(&self.scene.mesh) {
             Ok(built) => self.solver = Some(built),
             Err(e) => {

@@ -326,6 +326,12 @@ fn toggle_pin(app: &mut App, k: usize, point: usize) {
     };
     let mesh = std::sync::Arc::clone(&sim.scene.mesh);
     let pinned = !mesh.pinned()[point];
+    if matches!(app.grip, Some(Grip::Hold { .. })) {
+        // A pin takes the point from the hand (the run lets go of a point it pins); the
+        // hand lets go of any other, so the drag that follows moves nothing.
+        app.grip = None;
+        send_each(app, |_| Some(Touch::Release));
+    }
     send_each(app, |run| {
         Some(Touch::Pin {
             point: same_place(&mesh, &run.scene.mesh, point),

@@ -340,3 +340,21 @@ fn the_touches_key_a_writes_replay_headless_to_the_same_bits() {
     assert_eq!(replay.state, app.sim.state);
     assert_eq!(replay.scene.mesh, app.sim.scene.mesh);
 }
+
+#[test]
+fn pinning_the_held_point_takes_it_from_the_hand_and_a_drag_after_moves_nothing() {
+    let mut app = app_with("pinned4", true);
+    let top = pane(&mut app, View::Top);
+    let (col, row) = middle(&top);
+    update(&mut app, left_down(col, row));
+    let point = app.sim.held.unwrap().point;
+    press(&mut app, KeyCode::Char('P'));
+    assert!(app.sim.scene.mesh.pinned()[point]);
+    assert!(app.sim.held.is_none() && app.grip.is_none());
+    update(&mut app, Message::MouseDrag { col: col + 4, row });
+    assert_ne!(
+        app.note.as_ref().unwrap().level,
+        super::super::model::Level::Error
+    );
+    update(&mut app, Message::MouseUp);
+}
