@@ -23,6 +23,20 @@ fn step_frame(app: &mut App) {
     press(app, KeyCode::Char('n'));
 }
 
+/// A right-button stroke down column `col` of pane `d`, from its top row to its bottom one.
+fn cut_down(app: &mut App, d: &Drawn, col: u16) {
+    let down = Message::MouseDown {
+        col,
+        row: d.inner.y,
+        button: Button::Right,
+        ctrl: false,
+    };
+    update(app, down);
+    let row = d.inner.y + d.inner.height - 1;
+    update(app, Message::MouseDrag { col, row });
+    update(app, Message::MouseUp);
+}
+
 /// The cell at the middle of a pane.
 fn middle(d: &Drawn) -> (u16, u16) {
     (
@@ -243,23 +257,7 @@ fn snapshot_a_held_point_and_a_cut_cloth() {
     );
     insta::assert_snapshot!("held_point_100x30", held);
     update(&mut app, Message::MouseUp);
-    update(
-        &mut app,
-        Message::MouseDown {
-            col: col - 3,
-            row: top.inner.y,
-            button: Button::Right,
-            ctrl: false,
-        },
-    );
-    update(
-        &mut app,
-        Message::MouseDrag {
-            col: col - 3,
-            row: top.inner.y + top.inner.height - 1,
-        },
-    );
-    update(&mut app, Message::MouseUp);
+    cut_down(&mut app, &top, col - 3);
     for _ in 0..20 {
         step_frame(&mut app);
     }
@@ -304,23 +302,7 @@ fn the_touches_key_a_writes_replay_headless_to_the_same_bits() {
     step_frame(&mut app);
     update(&mut app, Message::MouseUp);
     press(&mut app, KeyCode::Char('t'));
-    update(
-        &mut app,
-        Message::MouseDown {
-            col: col - 5,
-            row: top.inner.y,
-            button: Button::Right,
-            ctrl: false,
-        },
-    );
-    update(
-        &mut app,
-        Message::MouseDrag {
-            col: col - 5,
-            row: top.inner.y + top.inner.height - 1,
-        },
-    );
-    update(&mut app, Message::MouseUp);
+    cut_down(&mut app, &top, col - 5);
     for _ in 0..10 {
         step_frame(&mut app);
     }
