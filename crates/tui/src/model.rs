@@ -274,7 +274,7 @@ pub struct App {
     pub undo: Vec<(Settings, &'static str)>,
     /// The settings and solver last opened or saved: edits past them are unsaved.
     pub saved: (Settings, &'static str),
-    /// The pins last opened or saved (see [`pins`]): a pin set or lifted by hand is unsaved.
+    /// The pins last opened or saved, in order: a pin set or lifted by hand is unsaved.
     pub saved_pins: Vec<(usize, usize)>,
     /// Say where the cloth is once the single frame asked for arrives.
     pub step_note: bool,
