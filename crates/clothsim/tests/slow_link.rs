@@ -287,6 +287,7 @@ impl Drop for Link {
 #[test]
 #[ignore = "timed against a 300 ms bound: run in release on a quiet machine (CI's ignored suite)"]
 fn over_16_kb_per_second_space_shows_paused_and_q_leaves_within_300_ms() {
+    let _alone = timed_alone();
     // Undamped, so the cloth is still swinging (and the link still busy) when space is
     // pressed: a settled cloth writes next to nothing and would prove nothing.
     let mut link = Link::start(
@@ -368,10 +369,19 @@ impl Drop for Tmux {
     }
 }
 
+/// Held by each test of this file, so that no two share the two cores: each bound is of one
+/// UI, one link and one terminal at a time.
+fn timed_alone() -> std::sync::MutexGuard<'static, ()> {
+    static TIMED: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    TIMED
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 impl Tmux {
-    /// A tmux server with the pane described on [`Tmux`], or `None` (with a notice) when tmux
-    /// is not installed outside CI.
-    fn start() -> Option<Self> {
+    /// A tmux server of its own (named `name`) with the pane described on [`Tmux`], or `None`
+    /// (with a notice) when tmux is not installed outside CI.
+    fn start(name: &str) -> Option<Self> {
         let available = Command::new("tmux")
             .arg("-V")
             .output()
@@ -385,7 +395,7 @@ impl Tmux {
             return None;
         }
         let t = Tmux {
-            socket: format!("clothsim-slow-{}", std::process::id()),
+            socket: format!("clothsim-slow-{}-{name}", std::process::id()),
             dir: tempfile::tempdir().expect("a temporary folder"),
         };
         let dir = t.dir.path();
@@ -456,7 +466,8 @@ impl Tmux {
 #[test]
 #[ignore = "timed against a 300 ms bound: run in release on a quiet machine (CI's ignored suite)"]
 fn in_tmux_over_16_kb_per_second_space_shows_paused_within_300_ms() {
-    let Some(t) = Tmux::start() else {
+    let _alone = timed_alone();
+    let Some(t) = Tmux::start("paused") else {
         return;
     };
     let link = Link::start(&["pinned4"], 200, 60, t.far_end());
@@ -527,6 +538,7 @@ fn pause_and_resume_at_once(cycles: usize, key: &dyn Fn(&str), header: &dyn Fn()
 #[test]
 #[ignore = "timed against a 300 ms bound: run in release on a quiet machine (CI's ignored suite)"]
 fn over_16_kb_per_second_space_right_after_a_pause_resumes_the_cloth_on_screen() {
+    let _alone = timed_alone();
     // Undamped: the cloth swings, so its rows keep the link busy when space is pressed.
     let mut link = Link::start(
         &["pinned4", "--set", "cloth.damping=0"],
@@ -556,7 +568,8 @@ fn over_16_kb_per_second_space_right_after_a_pause_resumes_the_cloth_on_screen()
 #[test]
 #[ignore = "timed against a 300 ms bound: run in release on a quiet machine (CI's ignored suite)"]
 fn in_tmux_over_16_kb_per_second_space_right_after_a_pause_resumes_the_cloth_on_screen() {
-    let Some(t) = Tmux::start() else {
+    let _alone = timed_alone();
+    let Some(t) = Tmux::start("resumes") else {
         return;
     };
     let _link = Link::start(
@@ -573,6 +586,7 @@ fn in_tmux_over_16_kb_per_second_space_right_after_a_pause_resumes_the_cloth_on_
 #[test]
 #[ignore = "reads the drawing rate of a running binary: run in release (CI's ignored suite)"]
 fn the_drawing_rate_never_exceeds_fps_on_a_fast_link() {
+    let _alone = timed_alone();
     let mut link = Link::start_at(
         64 * 1024 * 1024,
         &["pinned4", "--fps", "10"],
@@ -641,6 +655,7 @@ fn peak_resident(pid: u32) -> Option<f64> {
 #[cfg(target_os = "linux")]
 #[ignore = "a 500 x 500 cloth in the live UI: run in release (CI's ignored suite)"]
 fn the_live_ui_s_memory_estimate_is_within_a_quarter_of_what_it_takes() {
+    let _alone = timed_alone();
     // A soft cloth (ks 200 N/m) so that Verlet holds it at this spacing and the run goes on.
     let scene = [
         "pinned4",
