@@ -79,7 +79,7 @@
 //!   applies the wind between steps through the previous positions, as it applies a hand, so
 //!   every solver feels the same push; after 3 s of the course's drag (a swing down by e^-16)
 //!   the curtain hangs where wind, gravity and springs balance, a state of the model and not of
-//!   the integrator (the built-in solvers agree to 0.3 %). A solver that loses the velocity
+//!   the integrator. A solver that loses the velocity
 //!   handed to it between steps, or reads it over the wrong step, hangs where there is no wind
 //!   or off by the steps' ratio.
 //! - **time** (`time`, s): the case's wall-clock time is within its budget (below).
