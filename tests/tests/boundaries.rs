@@ -15,11 +15,12 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
-use std::path::Path;
-use std::process::Command;
+
+mod support;
 
 use serde::Deserialize;
 use serde_json::{Value, json};
+use support::root;
 
 /// Where the plan lives, from the workspace's root.
 const PLAN: &str = "docs/crates.toml";
@@ -358,34 +359,13 @@ fn reached(graph: &Graph, from: &str) -> BTreeMap<String, String> {
 }
 
 /// The workspace's root folder.
-fn root() -> &'static Path {
-    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
-}
-
 #[test]
 fn the_workspace_keeps_the_crate_plan() {
     let text = std::fs::read_to_string(root().join(PLAN)).expect("the plan is readable");
     let plan: Plan = toml::from_str(&text).unwrap_or_else(|e| panic!("{PLAN}: {e}"));
     assert_eq!(plan.problems(), Vec::<String>::new(), "{PLAN}");
 
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned());
-    let out = Command::new(cargo)
-        .args([
-            "metadata",
-            "--no-deps",
-            "--format-version",
-            "1",
-            "--manifest-path",
-        ])
-        .arg(root().join("Cargo.toml"))
-        .output()
-        .expect("cargo runs");
-    assert!(
-        out.status.success(),
-        "cargo metadata failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let metadata: Value = serde_json::from_slice(&out.stdout).expect("cargo metadata is JSON");
+    let metadata = support::metadata();
     let ws = Workspace::from_metadata(&metadata);
     // A plan with only planned crates would pass an empty workspace: make sure it was read.
     assert!(ws.crates.contains("cloth-solver"), "{:?}", ws.crates);

@@ -2,38 +2,13 @@
 //! on disk and its documentation's address, so a crate read on crates.io or docs.rs says what
 //! it is and where its guide is.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod support;
 
-use serde_json::Value;
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("the workspace")
-        .to_owned()
-}
+use std::path::PathBuf;
 
 #[test]
 fn every_publishable_crate_has_a_readme_a_description_and_its_documentation() {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned());
-    let out = Command::new(cargo)
-        .args([
-            "metadata",
-            "--no-deps",
-            "--format-version",
-            "1",
-            "--manifest-path",
-        ])
-        .arg(root().join("Cargo.toml"))
-        .output()
-        .expect("cargo runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let metadata: Value = serde_json::from_slice(&out.stdout).expect("cargo metadata is JSON");
+    let metadata = support::metadata();
     let packages = metadata["packages"].as_array().expect("packages");
     let mut checked = Vec::new();
     for p in packages {
