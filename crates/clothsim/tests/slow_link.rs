@@ -284,13 +284,11 @@ impl Drop for Link {
     }
 }
 
-#[test]
-#[ignore = "timed against a 300 ms bound: run in release on a quiet machine (CI's ignored suite)"]
-fn over_16_kb_per_second_space_shows_paused_and_q_leaves_within_300_ms() {
-    let _alone = timed_alone();
-    // Undamped, so the cloth is still swinging (and the link still busy) when space is
-    // pressed: a settled cloth writes next to nothing and would prove nothing.
-    let mut link = Link::start(
+/// The undamped pinned4 at 200 x 60 through the model link, its UI up and running: the cloth
+/// is still swinging (and the link still busy) when a key is pressed, where a settled cloth
+/// writes next to nothing and would prove nothing.
+fn swinging() -> Link {
+    let link = Link::start(
         &["pinned4", "--set", "cloth.damping=0"],
         200,
         60,
@@ -299,6 +297,14 @@ fn over_16_kb_per_second_space_shows_paused_and_q_leaves_within_300_ms() {
     link.wait("UI", Duration::from_secs(60), |f| {
         f.alternate && f.row(0).contains("RUNNING") && f.answers > 0
     });
+    link
+}
+
+#[test]
+#[ignore = "timed against a 300 ms bound: run in release on a quiet machine (CI's ignored suite)"]
+fn over_16_kb_per_second_space_shows_paused_and_q_leaves_within_300_ms() {
+    let _alone = timed_alone();
+    let mut link = swinging();
     // Let the fall fill the screen with motion for a while: an unpaced UI would by now have
     // filled the buffers with seconds of frames.
     sleep(Duration::from_secs(4));
@@ -539,16 +545,7 @@ fn pause_and_resume_at_once(cycles: usize, key: &dyn Fn(&str), header: &dyn Fn()
 #[ignore = "timed against a 300 ms bound: run in release on a quiet machine (CI's ignored suite)"]
 fn over_16_kb_per_second_space_right_after_a_pause_resumes_the_cloth_on_screen() {
     let _alone = timed_alone();
-    // Undamped: the cloth swings, so its rows keep the link busy when space is pressed.
-    let mut link = Link::start(
-        &["pinned4", "--set", "cloth.damping=0"],
-        200,
-        60,
-        FarEnd::Model,
-    );
-    link.wait("UI", Duration::from_secs(60), |f| {
-        f.alternate && f.row(0).contains("RUNNING") && f.answers > 0
-    });
+    let mut link = swinging();
     sleep(Duration::from_secs(3));
     let master = std::sync::Mutex::new(link.master.try_clone().expect("the master side"));
     pause_and_resume_at_once(
