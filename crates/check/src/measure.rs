@@ -180,8 +180,20 @@ pub(crate) struct SwapFigures {
     pub edit: f64,
     /// The steps per frame of the edit.
     pub edit_steps: u32,
+    /// The energy of Verlet's motion at frame `at`, where the solver takes over: kinetic plus
+    /// the springs' elastic energy, J.
+    pub motion_to: f64,
+    /// The energy of the solver's motion after its first frame, where Verlet takes back and the
+    /// edit happens, J.
+    pub motion_handed: f64,
     /// Wall-clock seconds.
     pub seconds: f64,
+}
+
+/// The energy of a cloth's motion: its kinetic energy and what its springs hold, which turn
+/// into each other as it swings, J.
+fn motion(mesh: &ClothMesh, state: &ClothState, params: &StepParams) -> f64 {
+    energy::kinetic(mesh, state, params) + energy::spring(mesh, state, params)
 }
 
 /// The swap case at frame `at`: Verlet (the course's 30 steps per frame) runs from rest to
@@ -213,6 +225,7 @@ pub(crate) fn swap(
         verlet.frame().map_err(|e| failed("Verlet", &e))?;
     }
     let taken = verlet.state().clone();
+    let motion_to = motion(mesh, &taken, verlet.params());
     verlet.frame().map_err(|e| failed("Verlet", &e))?;
     let ke_verlet = energy::kinetic(mesh, verlet.state(), verlet.params());
 
@@ -225,6 +238,7 @@ pub(crate) fn swap(
     let ke_to = energy::kinetic(mesh, solver.state(), solver.params());
     let handed = solver.state().clone();
     let solver_params = *solver.params();
+    let motion_handed = motion(mesh, &handed, &solver_params);
     solver
         .frame()
         .map_err(|e| failed("the solver's second frame", &e))?;
@@ -256,6 +270,8 @@ pub(crate) fn swap(
         back: ke_back,
         edit: ke_edit,
         edit_steps: steps + 1,
+        motion_to,
+        motion_handed,
         seconds: started.elapsed().as_secs_f64(),
     })
 }

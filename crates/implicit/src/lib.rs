@@ -22,8 +22,9 @@
 //! ([`cloth_solver::StepParams`]): the damping becomes the drag rate
 //! [`StepParams::drag_rate`](cloth_solver::StepParams::drag_rate), so it does not change with
 //! the step (100 % is an infinite drag: the cloth holds still); the 10 % stretch limit is part
-//! of the minimisation rather than the course's post-step sweep (an augmented term with a
-//! multiplier per spring, ADMM; `fast_implicit.rs` says how). Both own only caches and scratch
+//! of the minimisation (an augmented term with a multiplier per spring, ADMM), and the course's
+//! correction, swept until every spring is within the limit, ends the step (`fast_implicit.rs`
+//! says how, and why neither adds energy). Both own only caches and scratch
 //! memory (and the limit's multipliers, which a new solver starts at zero), so a live swap with
 //! [`cloth_solver::Verlet`] keeps the cloth's motion; see [`retime_velocity`] for swaps that
 //! change the step. Each states the memory it needs for a mesh (`memory_estimate`) and reports
