@@ -30,6 +30,16 @@ pub enum CheckError {
         /// The bundled names, comma-separated.
         available: String,
     },
+    /// A step count asked for has no runs in the set of cases.
+    #[error("--steps {asked}: the {set} set runs at {available} steps per frame")]
+    UnknownSteps {
+        /// The steps per frame asked for.
+        asked: u32,
+        /// `quick` or `full`.
+        set: &'static str,
+        /// The step counts of the set, comma-separated.
+        available: String,
+    },
     /// A bundled scene does not load (a broken build).
     #[error(transparent)]
     Scene(#[from] cloth_scene::SceneError),

@@ -79,6 +79,9 @@ pub struct CheckOptions {
     /// The full set (steps 1, 2, 5, 10, 30 and the solver's own, self-collision on and off)
     /// instead of the quick one.
     pub full: bool,
+    /// Only the runs at these steps per frame (empty for every count of the set); the swap and
+    /// wind cases, at the solver's own steps, are kept.
+    pub steps: Vec<u32>,
     /// A factor on every case's spring constant, for checking that verdicts do not hang on
     /// noise (1 for a check).
     pub ks_scale: f64,
@@ -93,6 +96,7 @@ impl Default for CheckOptions {
         Self {
             scenes: Vec::new(),
             full: false,
+            steps: Vec::new(),
             ks_scale: 1.0,
             threads: std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
         }
@@ -137,6 +141,7 @@ pub fn check_each(
     let named: Vec<(&'static str, StepParams)> =
         scenes.iter().map(|(n, s)| (*n, s.params)).collect();
     let cases = cases(entry.steps_per_frame(), &named, check.full);
+    let cases = only_steps(cases, &check.steps, check.full)?;
     let timing = calibrate(&scenes, &cases)?;
 
     let next = AtomicUsize::new(0);
@@ -265,6 +270,41 @@ struct Context<'a> {
 }
 
 /// `|a / b - 1|`, 0 when both are 0.
+/// `cases` but for the runs at steps per frame not in `steps` (all of them when it is empty).
+///
+/// # Errors
+/// [`CheckError::UnknownSteps`] for a count in `steps` at which no case of the set runs.
+fn only_steps(mut cases: Vec<Case>, steps: &[u32], full: bool) -> Result<Vec<Case>, CheckError> {
+    if steps.is_empty() {
+        return Ok(cases);
+    }
+    let mut counts: Vec<u32> = cases
+        .iter()
+        .filter_map(|case| match case.kind {
+            Kind::Run { steps, .. } => Some(steps),
+            Kind::Swap { .. } | Kind::Wind => None,
+        })
+        .collect();
+    counts.sort_unstable();
+    counts.dedup();
+    if let Some(&asked) = steps.iter().find(|s| !counts.contains(s)) {
+        return Err(CheckError::UnknownSteps {
+            asked,
+            set: if full { "full" } else { "quick" },
+            available: counts
+                .iter()
+                .map(u32::to_string)
+                .collect::<Vec<_>>()
+                .join(", "),
+        });
+    }
+    cases.retain(|case| match case.kind {
+        Kind::Run { steps: s, .. } => steps.contains(&s),
+        Kind::Swap { .. } | Kind::Wind => true,
+    });
+    Ok(cases)
+}
+
 fn relative_change(a: f64, b: f64) -> f64 {
     if a == b { 0.0 } else { (a / b - 1.0).abs() }
 }
@@ -700,6 +740,43 @@ mod tests {
         let own = run_one(&OWN, &wind);
         assert_eq!(own.verdict, Verdict::Fail, "{own}");
         assert_eq!(outcome(&own, WIND), crate::Outcome::Fail, "{own}");
+    }
+
+    #[test]
+    fn steps_keep_the_runs_at_those_counts_and_every_swap_and_refuse_a_count_the_set_lacks() {
+        let scenes = [
+            ("pinned4", StepParams::default()),
+            ("curtain", StepParams::default()),
+        ];
+        let full = cases(1, &scenes, true);
+        let kept = only_steps(full.clone(), &[1, 2], true).unwrap();
+        let runs = |cases: &[Case], steps: u32| {
+            cases
+                .iter()
+                .filter(|c| matches!(c.kind, Kind::Run { steps: s, .. } if s == steps))
+                .count()
+        };
+        for steps in [1, 2] {
+            assert_eq!(runs(&kept, steps), runs(&full, steps));
+        }
+        for steps in [5, 10, 30] {
+            assert!(runs(&full, steps) > 0);
+            assert_eq!(runs(&kept, steps), 0);
+        }
+        let others = |cases: &[Case]| {
+            cases
+                .iter()
+                .filter(|c| !matches!(c.kind, Kind::Run { .. }))
+                .count()
+        };
+        assert!(others(&full) > 0);
+        assert_eq!(others(&kept), others(&full));
+        assert_eq!(only_steps(full.clone(), &[], true).unwrap(), full);
+        let e = only_steps(cases(1, &scenes, false), &[5], false).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "--steps 5: the quick set runs at 1, 2 steps per frame"
+        );
     }
 
     #[test]

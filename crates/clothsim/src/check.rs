@@ -24,6 +24,10 @@ pub struct Args {
     /// for nightly runs, instead of the quick set.
     #[arg(long)]
     full: bool,
+    /// Only the runs at N steps per frame (repeatable; default: every count of the set, quick or
+    /// full); the swap and wind cases are kept.
+    #[arg(long = "steps", value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1000))]
+    steps: Vec<u32>,
     /// Print the reports as JSON (a list, one per solver) instead of the table.
     #[arg(long)]
     json: bool,
@@ -53,6 +57,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
     let mut check = CheckOptions {
         scenes: args.scenes.clone(),
         full: args.full,
+        steps: args.steps.clone(),
         ..CheckOptions::default()
     };
     if let Some(jobs) = args.jobs {
