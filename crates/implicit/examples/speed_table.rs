@@ -1,7 +1,7 @@
 //! The implicit solvers' whole-run times against Verlet's, on every bundled scene, in one run.
 //!
 //! `cargo run -p cloth-implicit --release --example speed_table -- [--only SOLVER]...
-//! [--scene NAME]... [--frames N] [--grid N]...`
+//! [--scene NAME]... [--frames N] [--grid N]... [--iterations N]`
 //!
 //! Each row runs a case from the flat start for `--frames` frames (360 by default: 4 s at 90 a
 //! second) on one thread, with self-collision as the scene says and the stretch limit on:
@@ -12,7 +12,9 @@
 //! 200 x 200 grids (`--grid` replaces those sizes; `--grid 0` leaves them out). The solvers of a
 //! case advance in turn, one frame each, so a machine whose speed drifts slows all of them
 //! alike. `--only` (repeatable) keeps the named implicit solvers; `--scene` (repeatable) keeps
-//! the named scenes.
+//! the named scenes; `--iterations N` caps fast-implicit's iterations a step at `N` (its
+//! `iterations` option), which with 1 measures the floor of its cost: one solve with the
+//! factor and the line search's evaluations a step.
 //!
 //! The bounds the figures are read against: fast-implicit at most 1.5 x and implicit at most
 //! 4 x Verlet at the scene's `ks`, both at most 0.25 x Verlet at 200 steps per frame at ks 1e6.
@@ -56,13 +58,21 @@ fn pinned4(n: usize) -> Result<ClothMesh, String> {
 }
 
 /// A solver's name, constructor and steps per frame.
-type Entry = (&'static str, fn() -> Box<dyn Solver>, u32);
+type Entry = (&'static str, Box<dyn Fn() -> Box<dyn Solver>>, u32);
 
-fn times(case: &Case, frames: usize, only: &[String]) -> Vec<Run> {
+fn times(case: &Case, frames: usize, only: &[String], iterations: Option<u32>) -> Vec<Run> {
+    let fast: Box<dyn Fn() -> Box<dyn Solver>> = match iterations {
+        Some(n) => Box::new(move || Box::new(FastImplicit::with_iterations(n))),
+        None => Box::new(|| Box::new(FastImplicit::new())),
+    };
     let solvers: [Entry; 3] = [
-        ("verlet", || Box::new(Verlet::new()), case.verlet_steps),
-        ("fast-implicit", || Box::new(FastImplicit::new()), 1),
-        ("implicit", || Box::new(ImplicitEuler::new()), 1),
+        (
+            "verlet",
+            Box::new(|| Box::new(Verlet::new())),
+            case.verlet_steps,
+        ),
+        ("fast-implicit", fast, 1),
+        ("implicit", Box::new(|| Box::new(ImplicitEuler::new())), 1),
     ];
     let mut runs: Vec<Run> = solvers
         .into_iter()
@@ -108,6 +118,7 @@ fn main() {
     let mut scenes = Vec::new();
     let mut grids = Vec::new();
     let mut frames = 360;
+    let mut iterations = None;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let value = args.next();
@@ -118,13 +129,17 @@ fn main() {
                 Ok(f) => frames = f,
                 Err(_) => fail(&format!("--frames {v}: expected a whole number of frames")),
             },
+            ("--iterations", Some(v)) => match v.parse::<u32>() {
+                Ok(n) if n >= 1 => iterations = Some(n),
+                _ => fail(&format!("--iterations {v}: expected a whole number from 1")),
+            },
             ("--grid", Some(v)) => match v.parse::<usize>() {
                 Ok(g) => grids.push(g),
                 Err(_) => fail(&format!("--grid {v}: expected a whole number of points")),
             },
             (a, _) => fail(&format!(
                 "unknown or incomplete argument {a}: expected --only SOLVER, --scene NAME, \
-                 --frames N or --grid N"
+                 --frames N, --grid N or --iterations N"
             )),
         }
     }
@@ -171,12 +186,15 @@ fn main() {
         "{frames} frames from the flat start, one thread, stretch limit on; whole-run seconds, \
          and each implicit solver (1 step per frame) over Verlet"
     );
+    if let Some(n) = iterations {
+        println!("fast-implicit at most {n} iterations a step");
+    }
     println!(
         "{:<26} {:>12} {:>22} {:>22}",
         "case", "verlet", "fast-implicit", "implicit"
     );
     for case in &cases {
-        let runs = times(case, frames, &only);
+        let runs = times(case, frames, &only, iterations);
         let reference = runs[0].seconds;
         let mut row = format!(
             "{:<26} {:>9.2} s  ",
