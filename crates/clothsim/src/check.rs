@@ -28,6 +28,10 @@ pub struct Args {
     /// full); the swap and wind cases are kept.
     #[arg(long = "steps", value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1000))]
     steps: Vec<u32>,
+    /// A factor on every case's spring constant (default 1), to see that no verdict hangs on
+    /// noise: a bound whose verdict flips at 1.0002 or 0.9998 measures noise, not the solver.
+    #[arg(long, value_name = "FACTOR", value_parser = parse_ks_scale)]
+    ks_scale: Option<f64>,
     /// Print the reports as JSON (a list, one per solver) instead of the table.
     #[arg(long)]
     json: bool,
@@ -38,6 +42,14 @@ pub struct Args {
     /// Options of the checked solver: `--option KEY=VALUE`, `--threads`, `--order`.
     #[command(flatten)]
     flags: SolverFlags,
+}
+
+/// `--ks-scale`: a finite factor from 0.5 to 2, where the cases stay the cases they are.
+fn parse_ks_scale(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(f) if (0.5..=2.0).contains(&f) => Ok(f),
+        _ => Err(format!("{text:?} is not a number from 0.5 to 2")),
+    }
 }
 
 /// Checks every solver asked for and prints each case as it ends, then each solver's summary.
@@ -58,6 +70,7 @@ pub fn run(args: &Args, registry: &Registry) -> anyhow::Result<()> {
         scenes: args.scenes.clone(),
         full: args.full,
         steps: args.steps.clone(),
+        ks_scale: args.ks_scale.unwrap_or(1.0),
         ..CheckOptions::default()
     };
     if let Some(jobs) = args.jobs {

@@ -579,6 +579,30 @@ fn bench_rejects_a_bad_grid_with_a_clear_message() {
 }
 
 #[test]
+fn check_refuses_a_step_count_its_set_lacks_and_a_ks_factor_out_of_range() {
+    // The step count is judged against the set before any case runs: the quick set runs at the
+    // solver's own steps, at 2, and at 1 for the stiff springs.
+    let o = clothsim(&[
+        "check", "--solver", "verlet", "--scene", "pinned4", "--steps", "5",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--steps 5: the quick set runs at 1, 2, 30 steps per frame"),
+        "{}",
+        stderr(&o)
+    );
+    for bad in ["0", "3", "nan", "inf", "1e400", "x"] {
+        let o = clothsim(&["check", "--ks-scale", bad]);
+        assert_eq!(o.status.code(), Some(2), "--ks-scale {bad}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("is not a number from 0.5 to 2"),
+            "--ks-scale {bad}: {}",
+            stderr(&o)
+        );
+    }
+}
+
+#[test]
 fn the_default_command_takes_the_ui_flags_at_the_top_level() {
     // Parsed as the live UI's arguments (not a usage error, exit code 2), the UI then refuses a
     // stdout that is not a terminal: the scene and flags reached the UI.

@@ -95,7 +95,9 @@
 //! caught by its pins outruns: at the bottom of pinned4's fall a frame's iterations leave
 //! springs at up to 1.2 rest. So after the minimisation the course's correction is swept over
 //! the step's positions until no spring is over the limit by more than 0.2 % of its rest length
-//! (the tolerance the multipliers' updates stop at), or 200 sweeps. A state so stretched would otherwise be snapped
+//! (the tolerance the multipliers' updates stop at), or 30 sweeps: as many as the course's
+//! Verlet makes in a frame, one a step, so a long taut chain the sweeps converge slowly on
+//! costs no more than the course's own limit does. A state so stretched would otherwise be snapped
 //! back by the first short step of a solver that takes over from this one (Verlet's sweep moves
 //! a point by the excess in a thirtieth of the step: a kick of several times the cloth's kinetic
 //! energy). Each correction is the projection onto the positions where its one spring is within
@@ -920,7 +922,7 @@ fn project_to_limit(mesh: &ClothMesh, x: &mut [Vec3]) -> u32 {
 
 /// At most this many sweeps of the course's correction end a step with the limit on (see
 /// [`project_to_limit`]).
-const MAX_PROJECTION_SWEEPS: u32 = 200;
+const MAX_PROJECTION_SWEEPS: u32 = 30;
 
 /// The largest distance, m, a free point moved over the last step (`positions - last`).
 fn fastest_point(mesh: &ClothMesh, state: &ClothState) -> f64 {
