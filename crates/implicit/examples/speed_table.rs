@@ -12,9 +12,9 @@
 //! 200 x 200 grids (`--grid` replaces those sizes; `--grid 0` leaves them out). The solvers of a
 //! case advance in turn, one frame each, so a machine whose speed drifts slows all of them
 //! alike. `--only` (repeatable) keeps the named implicit solvers; `--scene` (repeatable) keeps
-//! the named scenes; `--iterations N` caps fast-implicit's iterations a step at `N` (its
-//! `iterations` option), which with 1 measures the floor of its cost: one solve with the
-//! factor and the line search's evaluations a step.
+//! the named scenes; `--iterations N` caps fast-implicit's iterations and Newton's a step at
+//! `N`, which with 1 measures the floor of their cost: one direction and the line search's
+//! evaluations a step.
 //!
 //! The bounds the figures are read against: fast-implicit at most 1.5 x and implicit at most
 //! 4 x Verlet at the scene's `ks`, both at most 0.25 x Verlet at 200 steps per frame at ks 1e6.
@@ -22,7 +22,7 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use cloth_implicit::{FastImplicit, ImplicitEuler};
+use cloth_implicit::{FastImplicit, ImplicitEuler, MAX_PCG_ITERATIONS};
 use cloth_mesh::{ClothMesh, ClothState, Collider, GridSpec};
 use cloth_solver::{Solver, StepParams, Verlet, advance_frame};
 
@@ -65,6 +65,12 @@ fn times(case: &Case, frames: usize, only: &[String], iterations: Option<u32>) -
         Some(n) => Box::new(move || Box::new(FastImplicit::with_iterations(n))),
         None => Box::new(|| Box::new(FastImplicit::new())),
     };
+    let newton: Box<dyn Fn() -> Box<dyn Solver>> = match iterations {
+        Some(n) => {
+            Box::new(move || Box::new(ImplicitEuler::new().with_iterations(n, MAX_PCG_ITERATIONS)))
+        }
+        None => Box::new(|| Box::new(ImplicitEuler::new())),
+    };
     let solvers: [Entry; 3] = [
         (
             "verlet",
@@ -72,7 +78,7 @@ fn times(case: &Case, frames: usize, only: &[String], iterations: Option<u32>) -
             case.verlet_steps,
         ),
         ("fast-implicit", fast, 1),
-        ("implicit", Box::new(|| Box::new(ImplicitEuler::new())), 1),
+        ("implicit", newton, 1),
     ];
     let mut runs: Vec<Run> = solvers
         .into_iter()
@@ -187,7 +193,7 @@ fn main() {
          and each implicit solver (1 step per frame) over Verlet"
     );
     if let Some(n) = iterations {
-        println!("fast-implicit at most {n} iterations a step");
+        println!("fast-implicit and implicit at most {n} iterations a step");
     }
     println!(
         "{:<26} {:>12} {:>22} {:>22}",
