@@ -313,11 +313,10 @@ fn relative_change(a: f64, b: f64) -> f64 {
 /// `motion` (kinetic plus elastic) they are taken from.
 ///
 /// NOTE: not relative to `b` itself: at a swing's turning point the kinetic energy falls to a
-/// few per cent of the motion's, and there the same few tenths of a joule of two integrators'
-/// truncation make tens of per cent of it (backward Euler at one step a frame against Verlet,
-/// pinned4's rebound at frame 40 with the limit off: 0.3 J of 2 J, 14 %, where at frame 20 it
-/// is 0.6 J of 93 J). A swap that loses the velocity loses the kinetic part of the motion
-/// whole, which away from a turning point is most of it.
+/// small share of the motion's, the rest held by the springs, and there the same truncation
+/// of two integrators over a frame, a small share of the motion's energy all along, becomes a
+/// large share of the kinetic energy. A swap that loses the velocity loses the kinetic part of
+/// the motion whole, which away from a turning point is most of it.
 fn share_of(a: f64, b: f64, motion: f64) -> f64 {
     if a == b {
         0.0

@@ -92,15 +92,15 @@
 //! it there until a later window moves again.
 //!
 //! The multipliers converge at about the rate of the springs' own iteration, which a cloth
-//! caught by its pins outruns: at the bottom of pinned4's fall a frame's iterations leave
-//! springs at up to 1.2 rest. So after the minimisation the course's correction is swept over
+//! caught by its pins outruns: at the bottom of a fall a frame's iterations can leave springs
+//! well past the limit. So after the minimisation the course's correction is swept over
 //! the step's positions until no spring is over the limit by more than 0.2 % of its rest length
 //! (the tolerance the multipliers' updates stop at), or 30 sweeps: as many as the course's
 //! Verlet makes in a frame, one a step, so a long taut chain the sweeps converge slowly on
 //! costs no more than the course's own limit does. A state so stretched would otherwise be snapped
 //! back by the first short step of a solver that takes over from this one (Verlet's sweep moves
-//! a point by the excess in a thirtieth of the step: a kick of several times the cloth's kinetic
-//! energy). Each correction is the projection onto the positions where its one spring is within
+//! a point by the excess in a thirtieth of the step, a velocity thirty times what the same move
+//! over this step would make). Each correction is the projection onto the positions where its one spring is within
 //! the limit (its pinned ends held), a convex set that holds the step's start whenever the start
 //! is within the limit; a projection onto a convex set moves no point set farther from a point of
 //! the set, so no sweep lengthens `x - x0`, and the step's velocity `(x - x0) / h` and kinetic
