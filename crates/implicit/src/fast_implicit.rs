@@ -91,21 +91,21 @@
 //! redistribute; a window faster than 6 cm/s then returns the weight to its least value and holds
 //! it there until a later window moves again.
 //!
-//! The multipliers converge at about the rate of the springs' own iteration, which a cloth
-//! caught by its pins outruns: at the bottom of a fall a frame's iterations can leave springs
-//! well past the limit. So after the minimisation the course's correction is swept over
-//! the step's positions until no spring is over the limit by more than 0.2 % of its rest length
-//! (the tolerance the multipliers' updates stop at), or 30 sweeps: as many as the course's
-//! Verlet makes in a frame, one a step, so a long taut chain the sweeps converge slowly on
-//! costs no more than the course's own limit does. A state so stretched would otherwise be snapped
-//! back by the first short step of a solver that takes over from this one (Verlet's sweep moves
-//! a point by the excess in a thirtieth of the step, a velocity thirty times what the same move
-//! over this step would make). Each correction is the projection onto the positions where its one spring is within
-//! the limit (its pinned ends held), a convex set that holds the step's start whenever the start
-//! is within the limit; a projection onto a convex set moves no point set farther from a point of
-//! the set, so no sweep lengthens `x - x0`, and the step's velocity `(x - x0) / h` and kinetic
-//! energy do not grow. What a correction changes in the potential is its spring's excess
-//! stretch, which it removes.
+//! The multipliers converge at about the rate of the springs' own iteration, which a cloth caught
+//! by its pins outruns: at the bottom of a fall a frame's iterations can leave springs well past
+//! the limit. So after the minimisation the course's correction is swept over the step's positions
+//! until no spring is over the limit by more than 0.2 % of its rest length (the tolerance the
+//! multipliers' updates stop at), or 30 sweeps: as many as the course's Verlet makes in a frame,
+//! one a step, so a long taut chain the sweeps converge slowly on costs no more than the course's
+//! own limit does. A state so stretched would otherwise be snapped back by the first short step of
+//! a solver that takes over from this one (Verlet's sweep moves a point by the excess in a
+//! thirtieth of the step, a velocity thirty times what the same move over this step would make).
+//! Each correction is the projection onto the positions where its one spring is within the limit
+//! (its pinned ends held), a convex set that holds the step's start whenever the start is within
+//! the limit; a projection onto a convex set moves no point set farther from a point of the set, so
+//! no sweep lengthens `x - x0`, and the step's velocity `(x - x0) / h` and kinetic energy do not
+//! grow. What a correction changes in the potential is its spring's excess stretch, which it
+//! removes.
 //!
 //! NOTE: the multiplier is a vector fixed in space, not a length along the spring's current
 //! direction. A binding spring's tension is `w_s |u_s|`; where it exceeds `w_s 1.1 L_s` the
@@ -902,22 +902,21 @@ fn commit_in_step(
 }
 
 /// Sweeps the course's correction over `x` until no spring is longer than the limit by more
-/// than [`LIMIT_OVERSHOOT_TOLERANCE`] of its rest length, or [`MAX_PROJECTION_SWEEPS`] sweeps;
-/// returns the sweeps made. See the module documentation for why it adds no kinetic energy.
-fn project_to_limit(mesh: &ClothMesh, x: &mut [Vec3]) -> u32 {
+/// than [`LIMIT_OVERSHOOT_TOLERANCE`] of its rest length, or [`MAX_PROJECTION_SWEEPS`] sweeps.
+/// See the module documentation for why it adds no kinetic energy.
+fn project_to_limit(mesh: &ClothMesh, x: &mut [Vec3]) {
     let springs = mesh.springs();
     let pinned = mesh.pinned();
     let ratio = MAX_STRETCH + LIMIT_OVERSHOOT_TOLERANCE;
-    for sweep in 0..MAX_PROJECTION_SWEEPS {
+    for _ in 0..MAX_PROJECTION_SWEEPS {
         let over = springs
             .iter()
             .any(|s| (x[s.b as usize] - x[s.a as usize]).norm_squared() > (ratio * s.rest).powi(2));
         if !over {
-            return sweep;
+            return;
         }
         cloth_solver::limit_stretch(springs, pinned, x, MAX_STRETCH);
     }
-    MAX_PROJECTION_SWEEPS
 }
 
 /// At most this many sweeps of the course's correction end a step with the limit on (see
